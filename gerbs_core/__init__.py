@@ -40,6 +40,9 @@ _LAZY = {
     "GERBSInterpolator": "hermite",
     # polygon-mesh blending surfaces (DESIGN section 5)
     "MeshTopology": "mesh_topology",
+    "validate_geometry": "mesh_topology",
+    "Lattice": "tessellation",
+    "output_counts": "tessellation",
     "BlendingSurface": "mesh_surface",
 }
 

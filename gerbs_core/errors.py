@@ -63,6 +63,10 @@ class InvalidMeshError(GERBSValueError):
     ``"repeated_index"``, ``"index_out_of_range"``, ``"unused_vertex"``,
     ``"non_finite"``, ``"empty"``, ``"zero_length_edge"``, ``"bad_shape"``;
     ``element`` says what ``indices`` count (``"vertex"``, ``"edge"``, ``"face"``).
+    Edge problems (non-manifold, inconsistent orientation, zero length) report
+    the edges' end points with ``element="vertex"``, since the caller's edge
+    numbering is unknown to the core; the validator may attach ``edges`` and
+    ``faces`` attributes with the (a, b) pairs and the faces involved.
     """
 
     def __init__(self, problem: str, message: str, indices: Sequence[int] | None = None,

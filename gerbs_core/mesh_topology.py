@@ -1,0 +1,486 @@
+"""Polygon-mesh connectivity: CSR faces, edges, half-edges, ordered vertex stars.
+
+:class:`MeshTopology` is built from faces alone (a list of int sequences or an
+(F,k) int array; triangles, quads, n-gons, mixed; boundaries allowed) and is
+immutable. It validates the mesh as an oriented 2-manifold with boundary and
+raises :class:`~gerbs_core.errors.InvalidMeshError` otherwise (problem tags
+below). :func:`validate_geometry` checks vertex positions against a topology.
+
+Conventions (all arrays int64, read-only):
+
+* corners: ``face_vertices[face_offsets[f]:face_offsets[f+1]]`` are the
+  vertices of face f in order; corner c belongs to face ``corner_face[c]``.
+* half-edges are indexed like corners: half-edge c runs from
+  ``face_vertices[c]`` to ``face_vertices[corner_next[c]]``; ``halfedge_twin[c]``
+  is the opposite half-edge or -1 on the boundary.
+* edges: ``edges (E,2)`` with ``edges[e,0] < edges[e,1]``, sorted
+  lexicographically; ``halfedge_edge (C,)``; ``edge_halfedges (E,2)`` (second
+  column -1 for a boundary edge); ``edge_faces (E,2)`` likewise.
+* stars: ``star_corners[star_offsets[v]:star_offsets[v+1]]`` are the corners
+  at v ordered counter-clockwise (the sense of the face orientation). For a
+  boundary vertex the open fan starts at the face whose outgoing half-edge
+  (v -> next) is a boundary edge and ends at the face whose incoming
+  half-edge is a boundary edge. ``ring_vertices`` (CSR ``ring_offsets``) is the
+  1-ring in the same order (boundary vertices: one more neighbour than faces).
+
+Problem tags of the topological validation, checked in this order (the first
+failing check raises, naming all its offending elements):
+
+``bad_shape``      faces not a sequence of int sequences / (F,k) int array
+``empty``          no faces or no vertices
+``index_out_of_range``  a face refers to a vertex outside [0, n_vertices) (element face)
+``degenerate_face``     a face with fewer than 3 distinct vertices (element face)
+``repeated_index``      a face visiting a vertex twice, >= 3 distinct (element face)
+``duplicate_face``      two faces with the same vertex set (element face, all copies)
+``non_manifold_edge``   an edge used by more than two faces (element vertex: the
+                        edges' end points; ``err.edges`` holds the pairs, ``err.faces`` the faces)
+``inconsistent_orientation``  an edge traversed in the same direction by its two
+                        faces: flipped normals or a non-orientable mesh (element
+                        vertex, with ``err.edges``/``err.faces`` as above)
+``non_manifold_vertex`` a vertex whose faces form more than one fan (bow-tie) (element vertex)
+``unused_vertex``       a vertex in no face (element vertex). Checked first after the
+                        range check when there are more vertices than corners (then
+                        at most the first C + 1000 indices are examined), so that a
+                        huge ``n_vertices`` never allocates O(V) memory.
+"""
+from __future__ import annotations
+
+import itertools
+from functools import cached_property
+
+import numpy as np
+
+from .errors import InvalidMeshError
+
+__all__ = ["MeshTopology", "validate_geometry"]
+
+
+def _ro(a) -> np.ndarray:
+    a = np.ascontiguousarray(a)
+    a.flags.writeable = False
+    return a
+
+
+def _edge_error(problem, what, pairs, faces):
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    shown = ", ".join(f"({a}, {b})" for a, b in pairs[:10].tolist())
+    more = f" ... ({len(pairs)} edges in all)" if len(pairs) > 10 else ""
+    faces = np.unique(np.asarray(faces, dtype=np.int64))
+    err = InvalidMeshError(problem, f"{problem}: edges {shown}{more} {what} (faces "
+                           f"{', '.join(map(str, faces[:20].tolist()))}); vertices",
+                           np.unique(pairs), "vertex")
+    err.edges = [tuple(p) for p in pairs.tolist()]
+    err.faces = faces.tolist()
+    return err
+
+
+def _parse_faces(faces, n_vertices):
+    """Faces -> (sizes (F,), flat (C,)) int64, or raise bad_shape / empty."""
+    if isinstance(faces, np.ndarray) and faces.dtype != object:
+        if faces.size == 0:
+            raise InvalidMeshError("empty", "empty: the mesh has no faces", None, "face")
+        if faces.ndim != 2:
+            raise InvalidMeshError("bad_shape", f"bad_shape: a face array must be (F, k), got "
+                                   f"shape {faces.shape}", None, "face")
+        if faces.dtype.kind not in "iu":
+            raise InvalidMeshError("bad_shape", f"bad_shape: face indices must be integers, got "
+                                   f"dtype {faces.dtype}", None, "face")
+        flat = faces.astype(np.int64).ravel()  # a copy: the caller's array is never touched
+        sizes = np.full(faces.shape[0], faces.shape[1], dtype=np.int64)
+    else:
+        try:
+            faces = list(faces)
+        except TypeError:
+            raise InvalidMeshError("bad_shape", f"bad_shape: faces must be a sequence of int "
+                                   f"sequences, got {type(faces).__name__}", None, "face") from None
+        if not faces:
+            raise InvalidMeshError("empty", "empty: the mesh has no faces", None, "face")
+        try:
+            sizes = np.fromiter(map(len, faces), dtype=np.int64, count=len(faces))
+        except TypeError:
+            bad = [i for i, f in enumerate(faces) if not hasattr(f, "__len__")]
+            raise InvalidMeshError("bad_shape", "bad_shape: faces must be sequences of vertex "
+                                   "indices; not a sequence:", bad, "face") from None
+        try:
+            flat = np.array(list(itertools.chain.from_iterable(faces)))
+        except (TypeError, ValueError, OverflowError):
+            flat = np.array([], dtype=object)
+        if flat.size and flat.dtype.kind not in "iu" or (flat.size == 0 and sizes.sum() > 0):
+            bad = [i for i, f in enumerate(faces)
+                   if not all(isinstance(x, (int, np.integer)) and not isinstance(x, bool)
+                              and -2**62 < x < 2**62 for x in f)]
+            raise InvalidMeshError("bad_shape", "bad_shape: face entries must be integers; "
+                                   "faces", bad, "face")
+        flat = flat.astype(np.int64)
+    if n_vertices == 0:
+        raise InvalidMeshError("empty", "empty: the mesh has no vertices", None, "vertex")
+    return sizes, flat
+
+
+class MeshTopology:
+    """Immutable connectivity of an oriented polygon 2-manifold with boundary.
+
+    Parameters
+    ----------
+    faces : sequence of int sequences, or (F, k) int array
+        Vertex indices of each face, in a consistent orientation.
+    n_vertices : int, optional
+        Number of vertices (default: max index + 1). Every vertex must be used.
+
+    Raises :class:`InvalidMeshError` (see the module docstring for the tags).
+    Construction is vectorized: O(C log C) for C corners.
+    """
+
+    def __init__(self, faces, n_vertices: int | None = None):
+        if n_vertices is not None:
+            if isinstance(n_vertices, (bool, np.bool_)) or not isinstance(n_vertices, (int, np.integer)) \
+                    or n_vertices < 0:
+                raise InvalidMeshError("bad_shape", f"bad_shape: n_vertices must be an integer "
+                                       f">= 0, got {n_vertices!r}", None, "vertex")
+        sizes, flat = _parse_faces(faces, n_vertices)
+        V = int(flat.max(initial=-1)) + 1 if n_vertices is None else int(n_vertices)
+        if n_vertices is None and V <= 0:
+            V = 1  # all indices negative: reported as out of range below
+        F, C = len(sizes), len(flat)
+        offsets = np.zeros(F + 1, dtype=np.int64)
+        np.cumsum(sizes, out=offsets[1:])
+        cface = np.repeat(np.arange(F, dtype=np.int64), sizes)
+
+        bad = (flat < 0) | (flat >= V)
+        if bad.any():
+            raise InvalidMeshError("index_out_of_range", f"index_out_of_range: vertex indices "
+                                   f"{np.unique(flat[bad])[:10].tolist()} are outside [0, {V - 1}]"
+                                   f" in faces", np.unique(cface[bad]), "face")
+        if V > C:  # some vertex is unused; fail before allocating O(V) arrays (V may be huge)
+            unused = np.setdiff1d(np.arange(min(V, C + 1000)), flat)
+            raise InvalidMeshError("unused_vertex", f"unused_vertex: {V} vertices but only {C} "
+                                   f"face corners; vertices in no face", unused, "vertex")
+        # sort (face, vertex) pairs: repeated vertices inside a face become neighbours
+        order = np.lexsort((flat, cface))
+        sv = flat[order]
+        rep = np.zeros(C, dtype=bool)
+        rep[1:] = (sv[1:] == sv[:-1]) & (cface[1:] == cface[:-1])
+        distinct = sizes - np.bincount(cface[rep], minlength=F)
+        if (distinct < 3).any():
+            raise InvalidMeshError("degenerate_face", "degenerate_face: fewer than 3 distinct "
+                                   "vertices in faces", np.flatnonzero(distinct < 3), "face")
+        if rep.any():
+            raise InvalidMeshError("repeated_index", "repeated_index: a vertex occurs twice in "
+                                   "faces", np.unique(cface[rep]), "face")
+        self._check_duplicates(sizes, offsets, sv)
+        used = np.bincount(flat, minlength=V)
+
+        # half-edges (indexed like corners) and their successors inside each face
+        nxt = np.arange(1, C + 1, dtype=np.int64)
+        nxt[offsets[1:] - 1] = offsets[:-1]
+        prv = np.empty(C, dtype=np.int64)
+        prv[nxt] = np.arange(C, dtype=np.int64)
+        a, b = flat, flat[nxt]
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        ukey = lo * V + hi
+        eorder = np.argsort(ukey, kind="stable")
+        sk = ukey[eorder]
+        first = np.ones(C, dtype=bool)
+        first[1:] = sk[1:] != sk[:-1]
+        starts = np.flatnonzero(first)
+        counts = np.diff(np.append(starts, C))
+        if (counts > 2).any():
+            bad_e = starts[counts > 2]
+            grp = np.repeat(counts > 2, counts)
+            raise _edge_error("non_manifold_edge", "are shared by more than two faces",
+                              np.stack([lo[eorder[bad_e]], hi[eorder[bad_e]]], 1),
+                              cface[eorder[grp]])
+        E = len(starts)
+        he_edge = np.empty(C, dtype=np.int64)
+        he_edge[eorder] = np.repeat(np.arange(E), counts)
+        e_he = np.full((E, 2), -1, dtype=np.int64)
+        e_he[:, 0] = eorder[starts]
+        two = counts == 2
+        e_he[two, 1] = eorder[starts[two] + 1]
+        h0, h1 = e_he[two, 0], e_he[two, 1]
+        same = a[h0] == a[h1]
+        if same.any():
+            raise _edge_error("inconsistent_orientation", "are traversed in the same direction "
+                              "by both their faces (flipped face orientation or non-orientable "
+                              "surface)", np.stack([lo[h0[same]], hi[h0[same]]], 1),
+                              np.concatenate([cface[h0[same]], cface[h1[same]]]))
+        twin = np.full(C, -1, dtype=np.int64)
+        twin[h0], twin[h1] = h1, h0
+        # keep the first half-edge of a boundary edge; orient edges by vertex order
+        edges = np.stack([lo[e_he[:, 0]], hi[e_he[:, 0]]], 1)
+
+        star_offsets, star_corners, vb = self._stars(flat, prv, twin, used, V, C)
+        if (used == 0).any():
+            raise InvalidMeshError("unused_vertex", "unused_vertex: vertices in no face",
+                                   np.flatnonzero(used == 0), "vertex")
+
+        self.n_vertices, self.n_faces, self.n_edges, self.n_corners = V, F, E, C
+        self.face_offsets = _ro(offsets)
+        self.face_vertices = _ro(flat)
+        self.face_sizes = _ro(sizes)
+        self.corner_face = _ro(cface)
+        self.corner_next = _ro(nxt)
+        self.corner_prev = _ro(prv)
+        self.halfedge_twin = _ro(twin)
+        self.halfedge_edge = _ro(he_edge)
+        self.edges = _ro(edges)
+        self.edge_halfedges = _ro(e_he)
+        ef = np.where(e_he >= 0, cface[e_he], -1)
+        self.edge_faces = _ro(ef)
+        self.edge_is_boundary = _ro(e_he[:, 1] < 0)
+        self.vertex_is_boundary = _ro(vb)
+        self.star_offsets = _ro(star_offsets)
+        self.star_corners = _ro(star_corners)
+        self._frozen = True
+
+    def __setattr__(self, name, value):
+        if getattr(self, "_frozen", False):
+            raise AttributeError(f"MeshTopology is immutable (cannot set {name!r})")
+        object.__setattr__(self, name, value)
+
+    @staticmethod
+    def _check_duplicates(sizes, offsets, sorted_vertices):
+        """Faces with the same vertex set (in any order) -> duplicate_face."""
+        dups = []
+        for k in np.unique(sizes):
+            fk = np.flatnonzero(sizes == k)
+            if len(fk) < 2:
+                continue
+            rows = sorted_vertices[offsets[fk][:, None] + np.arange(k)]
+            o = np.lexsort(rows.T[::-1])
+            eq = (rows[o[1:]] == rows[o[:-1]]).all(axis=1)
+            if eq.any():
+                dups.append(fk[o[1:][eq]])
+                dups.append(fk[o[:-1][eq]])
+        if dups:
+            raise InvalidMeshError("duplicate_face", "duplicate_face: faces with the same "
+                                   "vertices", np.unique(np.concatenate(dups)), "face")
+
+    @staticmethod
+    def _stars(flat, prv, twin, used, V, C):
+        """Order the corners around each vertex counter-clockwise; detect bow-ties.
+
+        Rotating counter-clockwise about v crosses the incoming half-edge
+        (p -> v) of the current corner, so succ(c) = twin(prev(c)). Open fans
+        start at the corner whose outgoing half-edge has no twin.
+        """
+        succ = np.where(twin[prv] >= 0, twin[prv], -1)
+        offsets = np.zeros(V + 1, dtype=np.int64)
+        np.cumsum(used, out=offsets[1:])
+        by_v = np.argsort(flat, kind="stable")  # corners grouped by vertex
+        start = np.full(V, -1, dtype=np.int64)
+        has = used > 0
+        start[has] = by_v[offsets[:-1][has]]
+        bnd_out = np.flatnonzero(twin < 0)  # corners whose outgoing half-edge is boundary
+        nb = np.bincount(flat[bnd_out], minlength=V)
+        start[flat[bnd_out]] = bnd_out
+        bad = nb > 1  # two open fans at one vertex
+        out = np.full(C, -1, dtype=np.int64)
+        cur = start.copy()
+        verts = np.flatnonzero(has)
+        cur_v = cur[verts]
+        k = 0
+        while verts.size:
+            out[offsets[verts] + k] = cur_v
+            cur_v = succ[cur_v]
+            k += 1
+            # stop at the end of an open fan, on closing the cycle, or at the corner count
+            keep = (cur_v >= 0) & (cur_v != start[verts]) & (k < used[verts])
+            done = verts[~keep]
+            walked = np.full(done.shape, k)
+            bad[done[walked < used[done]]] = True  # more corners than one fan holds
+            verts, cur_v = verts[keep], cur_v[keep]
+        if bad.any():
+            raise InvalidMeshError("non_manifold_vertex", "non_manifold_vertex: the faces at "
+                                   "these vertices form more than one fan (bow-tie)",
+                                   np.flatnonzero(bad), "vertex")
+        return offsets, out, nb > 0
+
+    # ------------------------------------------------------------------ queries
+    @cached_property
+    def star_faces(self) -> np.ndarray:
+        """(C,) face of each star corner (CSR ``star_offsets``), counter-clockwise."""
+        return _ro(self.corner_face[self.star_corners])
+
+    @cached_property
+    def vertex_valence(self) -> np.ndarray:
+        """(V,) number of edges at each vertex (= faces, +1 on the boundary)."""
+        return _ro(np.diff(self.star_offsets) + self.vertex_is_boundary)
+
+    @cached_property
+    def _ring(self):
+        V, so, sc = self.n_vertices, self.star_offsets, self.star_corners
+        val = np.diff(so) + self.vertex_is_boundary
+        ro = np.zeros(V + 1, dtype=np.int64)
+        np.cumsum(val, out=ro[1:])
+        rv = np.empty(ro[-1], dtype=np.int64)
+        pos = np.repeat(ro[:-1] - so[:-1], np.diff(so)) + np.arange(len(sc))
+        rv[pos] = self.face_vertices[self.corner_next[sc]]
+        bv = np.flatnonzero(self.vertex_is_boundary)
+        rv[ro[bv + 1] - 1] = self.face_vertices[self.corner_prev[sc[so[bv + 1] - 1]]]
+        return _ro(ro), _ro(rv)
+
+    @property
+    def ring_offsets(self) -> np.ndarray:
+        """(V+1,) CSR offsets of :attr:`ring_vertices`."""
+        return self._ring[0]
+
+    @property
+    def ring_vertices(self) -> np.ndarray:
+        """1-rings, counter-clockwise; entry i of vertex v's ring is the far end of the
+        outgoing half-edge of its i-th star corner (boundary: plus the last neighbour)."""
+        return self._ring[1]
+
+    def star(self, v: int) -> np.ndarray:
+        """Corners at vertex v, counter-clockwise (open fans from boundary to boundary)."""
+        return self.star_corners[self.star_offsets[v]:self.star_offsets[v + 1]]
+
+    def one_ring(self, v: int) -> np.ndarray:
+        """Neighbours of v, counter-clockwise (see :attr:`ring_vertices`)."""
+        return self.ring_vertices[self.ring_offsets[v]:self.ring_offsets[v + 1]]
+
+    def face(self, f: int) -> np.ndarray:
+        """Vertex indices of face f in order."""
+        return self.face_vertices[self.face_offsets[f]:self.face_offsets[f + 1]]
+
+    def faces_as_list(self) -> list[tuple[int, ...]]:
+        fv = self.face_vertices.tolist()
+        o = self.face_offsets.tolist()
+        return [tuple(fv[o[f]:o[f + 1]]) for f in range(self.n_faces)]
+
+    def k_ring(self, v, k: int, include_self: bool = False) -> np.ndarray:
+        """Sorted vertices at edge distance 1..k from v (or from a set of vertices v)."""
+        ro, rv = self.ring_offsets, self.ring_vertices
+        seen = np.zeros(self.n_vertices, dtype=bool)
+        front = np.unique(np.atleast_1d(np.asarray(v, dtype=np.int64)))
+        seen[front] = True
+        for _ in range(int(k)):
+            if not front.size:
+                break
+            idx = np.concatenate([np.arange(ro[u], ro[u + 1]) for u in front])
+            nb = np.unique(rv[idx])
+            front = nb[~seen[nb]]
+            seen[front] = True
+        if not include_self:
+            seen[np.atleast_1d(v)] = False
+        return np.flatnonzero(seen)
+
+    @cached_property
+    def _vertex_face_csr(self):
+        """Sparse (V, F) incidence, for face-ring queries."""
+        from scipy.sparse import csr_matrix
+        C = self.n_corners
+        return csr_matrix((np.ones(C, dtype=np.int8), (self.face_vertices, self.corner_face)),
+                          shape=(self.n_vertices, self.n_faces))
+
+    def face_k_ring(self, v, k: int = 1) -> np.ndarray:
+        """Sorted faces within k face layers of vertex v (or a set of vertices).
+
+        Layer 1 is the star of v; layer j+1 adds every face sharing a vertex
+        with layer j (the "faces beyond the link").
+        """
+        M = self._vertex_face_csr
+        verts = np.unique(np.atleast_1d(np.asarray(v, dtype=np.int64)))
+        faces = np.zeros(0, dtype=np.int64)
+        for _ in range(max(int(k), 0)):
+            faces = np.unique(M[verts].indices)
+            verts = np.unique(np.concatenate([self.face(f) for f in faces]))
+        return faces.astype(np.int64)
+
+    @cached_property
+    def halfedge_twin_face(self) -> np.ndarray:
+        """(C,) face on the other side of each half-edge, -1 on the boundary."""
+        t = self.halfedge_twin
+        return _ro(np.where(t >= 0, self.corner_face[np.maximum(t, 0)], -1))
+
+    def face_neighbors(self, f: int) -> np.ndarray:
+        """Faces across the edges of face f, in corner order (-1 for a boundary edge)."""
+        return self.halfedge_twin_face[self.face_offsets[f]:self.face_offsets[f + 1]]
+
+    @cached_property
+    def face_adjacency(self):
+        """scipy.sparse.csr_matrix (F, F): 1 where two faces share an edge."""
+        from scipy.sparse import csr_matrix
+        e = self.edge_faces[~self.edge_is_boundary]
+        F = self.n_faces
+        return csr_matrix((np.ones(2 * len(e), dtype=np.int8),
+                           (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])), shape=(F, F))
+
+    @cached_property
+    def boundary_loops(self) -> tuple[np.ndarray, ...]:
+        """Boundary loops as vertex arrays, each following the half-edge direction
+        (the mesh lies to the left), starting at its smallest half-edge index."""
+        bh = np.flatnonzero(self.halfedge_twin < 0)
+        if not bh.size:
+            return ()
+        fv = self.face_vertices
+        out_of = np.full(self.n_vertices, -1, dtype=np.int64)
+        out_of[fv[bh]] = bh
+        nxt = out_of[fv[self.corner_next[bh]]]  # boundary half-edge leaving the end vertex
+        nxt_map = dict(zip(bh.tolist(), nxt.tolist()))
+        seen, loops = set(), []
+        for h in bh.tolist():
+            if h in seen:
+                continue
+            loop = []
+            while h not in seen:
+                seen.add(h)
+                loop.append(h)
+                h = nxt_map[h]
+            loops.append(_ro(fv[np.asarray(loop, dtype=np.int64)]))
+        return tuple(loops)
+
+    @property
+    def is_closed(self) -> bool:
+        return not bool(self.edge_is_boundary.any())
+
+    @property
+    def euler_characteristic(self) -> int:
+        return self.n_vertices - self.n_edges + self.n_faces
+
+    def __repr__(self):
+        return (f"MeshTopology(V={self.n_vertices}, E={self.n_edges}, F={self.n_faces}, "
+                f"boundary_edges={int(self.edge_is_boundary.sum())})")
+
+
+def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12) -> None:
+    """Check vertex positions (V, d), d = 2 or 3, against ``topology``; return None or raise.
+
+    Tags (checked in this order): ``bad_shape`` (wrong shape / count),
+    ``non_finite`` (NaN or inf coordinates; element vertex), ``zero_length_edge``
+    (|x_a - x_b| <= rtol * D, D the bounding-box diagonal; element vertex, the
+    end points, ``err.edges`` the pairs), ``degenerate_face`` for zero-area /
+    collinear faces: |vector area| <= rtol * (longest edge of the face)**2
+    (element face). The vector area sum_k x_k x x_{k+1} / 2 vanishes exactly
+    for collinear corners and for self-cancelling (bow-tie) polygons.
+    """
+    x = np.asarray(vertices)
+    if x.ndim != 2 or x.shape[1] not in (2, 3) or x.shape[0] != topology.n_vertices \
+            or x.dtype.kind not in "fiu":
+        raise InvalidMeshError("bad_shape", f"bad_shape: vertices must be a real ({topology.n_vertices}"
+                               f", 3) array, got shape {x.shape} dtype {x.dtype}", None, "vertex")
+    x = x.astype(np.float64)  # a copy
+    if x.shape[1] == 2:
+        x = np.concatenate([x, np.zeros((len(x), 1))], 1)
+    nf = ~np.isfinite(x).all(axis=1)
+    if nf.any():
+        raise InvalidMeshError("non_finite", "non_finite: NaN or infinite coordinates at vertices",
+                               np.flatnonzero(nf), "vertex")
+    diag = float(np.linalg.norm(x.max(0) - x.min(0)))
+    e = topology.edges
+    length = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)
+    short = length <= rtol * diag
+    if short.any():
+        raise _edge_error("zero_length_edge", f"have length <= {rtol:g} * bounding-box diagonal",
+                          e[short], topology.edge_faces[short][topology.edge_faces[short] >= 0])
+    fv, nxt, cf = topology.face_vertices, topology.corner_next, topology.corner_face
+    base = x[fv[topology.face_offsets[cf]]]  # relative to the first corner: no cancellation
+    p, q = x[fv] - base, x[fv[nxt]] - base
+    varea = np.zeros((topology.n_faces, 3))
+    np.add.at(varea, cf, np.cross(p, q))  # twice the vector area
+    longest = np.zeros(topology.n_faces)
+    np.maximum.at(longest, cf, length[topology.halfedge_edge])
+    flat = 0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2
+    if flat.any():
+        raise InvalidMeshError("degenerate_face", "degenerate_face: zero area (collinear "
+                               "corners) in faces", np.flatnonzero(flat), "face")

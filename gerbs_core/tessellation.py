@@ -1,0 +1,305 @@
+"""Crack-free sample lattices on polygon meshes (DESIGN section 5, "Tessellation").
+
+At resolution r (segments per edge) every face is sampled by a lattice:
+triangles by the barycentric lattice {(i, j) / r}, quads by the r x r
+bilinear lattice, n-gons (n >= 5) by a fan of n triangular lattices from the
+face centre. Samples on mesh vertices and edges are shared by all incident
+faces and stored ONCE, so no output point is duplicated and there are no
+cracks: an edge sample is at the same fraction t of the edge from either side
+(linear along straight edges in every reference polygon).
+
+Global sample numbering (P samples):
+    [0, V)                       mesh vertices (``vertex_sample = arange(V)``)
+    [V, V + E(r-1))              edge interiors: ``edge_samples[e, m-1]`` at
+                                 fraction m/r from ``edges[e,0]`` to ``edges[e,1]``
+    then one block per face      face interiors (n-gons: centre, spokes, fan interiors)
+
+Per-sample parameters (the face used to evaluate it, ``face[p]``):
+    triangle  ``fan = -1``, ``uv = (l1, l2)``: barycentric w.r.t. corners 1, 2 (l0 = 1 - l1 - l2)
+    quad      ``fan = -1``, ``uv = (s, t)``: bilinear, (1-s)(1-t) c0 + s(1-t) c1 + st c2 + (1-s)t c3
+    n-gon     ``fan = k``,  ``uv = (l1, l2)`` in the fan triangle (centre, corner k, corner k+1)
+A vertex sample is evaluated in the first face of its (ordered) star, an edge
+sample in the face of the edge's first half-edge (``edge_halfedges[e, 0]``).
+
+The local table (``local_*``) lists every (face, lattice point) occurrence,
+sorted by face, with its parameters in that face and its global sample; it
+lets callers (and tests) evaluate a shared sample from every incident face.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from .errors import InvalidParameterError, ResourceLimitError
+
+__all__ = ["Lattice", "output_counts"]
+
+_CORNER, _EDGE, _INTERIOR = 0, 1, 2
+
+
+def _check_resolution(r) -> int:
+    if isinstance(r, (bool, np.bool_)) or not isinstance(r, (int, np.integer)) or r < 1:
+        raise InvalidParameterError("resolution", f"must be an integer >= 1 (segments per "
+                                    f"edge), got {r!r}")
+    return int(r)
+
+
+def _face_counts(sizes: np.ndarray, r: int):
+    """(interior samples, output triangles) per face of the given corner counts."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    nt = (r - 1) * (r - 2) // 2
+    inner = np.where(sizes == 3, nt, np.where(sizes == 4, (r - 1) ** 2,
+                                              1 + sizes * (r - 1) + sizes * nt))
+    tris = np.where(sizes == 4, 2 * r * r, np.where(sizes == 3, r * r, sizes * r * r))
+    return inner, tris
+
+
+def output_counts(topology, resolution: int) -> tuple[int, int]:
+    """Exact (points, triangles) of :class:`Lattice` ``(topology, resolution)``.
+
+    points    = V + E (r-1) + sum_tri (r-1)(r-2)/2 + sum_quad (r-1)^2
+                + sum_ngon [1 + n (r-1) + n (r-1)(r-2)/2]
+    triangles = sum_tri r^2 + sum_quad 2 r^2 + sum_ngon n r^2
+    """
+    r = _check_resolution(resolution)
+    sizes = np.asarray(topology.face_sizes)
+    n3, n4 = int((sizes == 3).sum()), int((sizes == 4).sum())
+    ng, sg = int((sizes >= 5).sum()), int(sizes[sizes >= 5].sum())
+    nt = (r - 1) * (r - 2) // 2  # Python ints: no overflow for absurd resolutions
+    pts = (int(topology.n_vertices) + int(topology.n_edges) * (r - 1) + n3 * nt
+           + n4 * (r - 1) ** 2 + ng + sg * (r - 1) + sg * nt)
+    return pts, r * r * (n3 + 2 * n4 + sg)
+
+
+@lru_cache(maxsize=64)
+def _template(n: int, r: int):
+    """Lattice template of an n-gon at resolution r (read-only arrays).
+
+    Returns (uv, fan, kind, loc, pos, canonical, tris): per lattice point its
+    parameters and fan, its kind (corner/edge/interior), ``loc`` the corner or
+    edge (k: corner k -> k+1) number or the interior number, ``pos`` = m, the
+    position 1..r-1 along edge ``loc`` from corner k; ``canonical`` marks the
+    one occurrence of each point of the face that may own it; ``tris`` the
+    counter-clockwise lattice triangles in template indices.
+    """
+    ij = np.array([(i, j) for j in range(r + 1) for i in range(r + 1 - j)], dtype=np.int64)
+    i, j = ij[:, 0], ij[:, 1]
+    lut = np.full((r + 1, r + 1), -1, dtype=np.int64)
+    lut[i, j] = np.arange(len(ij))
+    # lattice triangles of the barycentric lattice: up (i,j),(i+1,j),(i,j+1); down ...
+    up = ij[i + j < r]
+    dn = ij[i + j < r - 1]
+    tri_t = np.concatenate([
+        np.stack([lut[up[:, 0], up[:, 1]], lut[up[:, 0] + 1, up[:, 1]], lut[up[:, 0], up[:, 1] + 1]], 1),
+        np.stack([lut[dn[:, 0] + 1, dn[:, 1]], lut[dn[:, 0] + 1, dn[:, 1] + 1],
+                  lut[dn[:, 0], dn[:, 1] + 1]], 1)])
+    inner_t = (i >= 1) & (j >= 1) & (i + j < r)
+    inum_t = np.cumsum(inner_t) - 1
+    nt = (r - 1) * (r - 2) // 2
+    m_ = len(ij)
+
+    if n == 3:
+        uv = ij / r
+        kind = np.full(m_, _INTERIOR)
+        loc, pos = inum_t.copy(), np.zeros(m_, dtype=np.int64)
+        for (ci, cj), k in (((0, 0), 0), ((r, 0), 1), ((0, r), 2)):
+            sel = (i == ci) & (j == cj)
+            kind[sel], loc[sel] = _CORNER, k
+        for sel, k, m in (((j == 0) & (i > 0) & (i < r), 0, i),
+                          ((i + j == r) & (j > 0) & (j < r), 1, j),
+                          ((i == 0) & (j > 0) & (j < r), 2, r - j)):
+            kind[sel], loc[sel], pos[sel] = _EDGE, k, m[sel]
+        fan = np.full(m_, -1)
+        canon = np.ones(m_, dtype=bool)
+        tris = tri_t
+    elif n == 4:
+        jj, ii = np.meshgrid(np.arange(r + 1), np.arange(r + 1), indexing="ij")
+        i, j = ii.ravel(), jj.ravel()
+        uv = np.stack([i, j], 1) / r
+        m_ = len(i)
+        kind = np.full(m_, _INTERIOR)
+        loc = (j - 1) * (r - 1) + (i - 1)
+        pos = np.zeros(m_, dtype=np.int64)
+        for (ci, cj), k in (((0, 0), 0), ((r, 0), 1), ((r, r), 2), ((0, r), 3)):
+            sel = (i == ci) & (j == cj)
+            kind[sel], loc[sel] = _CORNER, k
+        mid = lambda a: (a > 0) & (a < r)  # noqa: E731
+        for sel, k, m in (((j == 0) & mid(i), 0, i), ((i == r) & mid(j), 1, j),
+                          ((j == r) & mid(i), 2, r - i), ((i == 0) & mid(j), 3, r - j)):
+            kind[sel], loc[sel], pos[sel] = _EDGE, k, m[sel]
+        fan = np.full(m_, -1)
+        canon = np.ones(m_, dtype=bool)
+        cj, ci = np.meshgrid(np.arange(r), np.arange(r), indexing="ij")
+        a = (cj * (r + 1) + ci).ravel()
+        b, c, d = a + 1, a + r + 2, a + r + 1
+        tris = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    else:
+        # fan k: (l1, l2) = (i, j)/r weights of corners k and k+1, centre weight the rest
+        k_ = np.repeat(np.arange(n), m_)
+        i, j = np.tile(i, n), np.tile(j, n)
+        uv = np.stack([i, j], 1) / r
+        fan = k_
+        kind = np.full(n * m_, _INTERIOR)
+        loc = np.zeros(n * m_, dtype=np.int64)
+        pos = np.zeros(n * m_, dtype=np.int64)
+        canon = np.ones(n * m_, dtype=bool)
+        centre = (i == 0) & (j == 0)
+        canon[centre & (k_ > 0)] = False  # loc 0 = the centre
+        sel = (i == r) & (j == 0)
+        kind[sel], loc[sel] = _CORNER, k_[sel]
+        sel = (i == 0) & (j == r)
+        kind[sel], loc[sel], canon[sel] = _CORNER, (k_[sel] + 1) % n, False
+        sel = (i + j == r) & (j > 0) & (j < r)
+        kind[sel], loc[sel], pos[sel] = _EDGE, k_[sel], j[sel]
+        sel = (j == 0) & (i > 0) & (i < r)  # spoke k
+        loc[sel] = 1 + k_[sel] * (r - 1) + i[sel] - 1
+        sel = (i == 0) & (j > 0) & (j < r)  # spoke k+1, owned by fan k+1
+        loc[sel], canon[sel] = 1 + ((k_[sel] + 1) % n) * (r - 1) + j[sel] - 1, False
+        sel = np.tile(inner_t, n)
+        loc[sel] = 1 + n * (r - 1) + k_[sel] * nt + np.tile(inum_t, n)[sel]
+        tris = (tri_t[None] + (np.arange(n) * m_)[:, None, None]).reshape(-1, 3)
+    out = (uv.astype(np.float64), fan.astype(np.int64), kind.astype(np.int64),
+           loc.astype(np.int64), pos.astype(np.int64), canon, tris.astype(np.int64))
+    for a in out:
+        a.flags.writeable = False
+    return out
+
+
+def _ro(a):
+    a = np.ascontiguousarray(a)
+    a.flags.writeable = False
+    return a
+
+
+class Lattice:
+    """Samples and output triangles of ``topology`` at ``resolution`` r >= 1 (immutable).
+
+    Attributes (read-only arrays; P samples, T triangles, L local entries):
+      ``n_points``, ``n_triangles``, ``resolution``, ``topology``
+      ``face (P,)``, ``fan (P,)``, ``uv (P,2)``: evaluation face and parameters of each sample
+      ``vertex_sample (V,)``: sample of each mesh vertex (= arange(V))
+      ``edge_samples (E, r-1)``: interior samples of edge e from ``edges[e,0]`` to ``edges[e,1]``
+      ``triangles (T,3)``: output triangles, oriented like their faces, grouped by face
+      ``triangle_face (T,)``: the face each output triangle lies in
+      ``local_face, local_fan, local_uv, local_sample (L,)``: every lattice point of every
+      face (shared points once per incident face), sorted by face, CSR ``local_offsets (F+1,)``
+
+    ``max_points``: refuse (ResourceLimitError, stating the estimate) if P would exceed it.
+    """
+
+    def __init__(self, topology, resolution: int, max_points: int | None = None):
+        r = _check_resolution(resolution)
+        P, T = output_counts(topology, r)
+        if max_points is not None and P > max_points:
+            raise ResourceLimitError(f"resolution {r} gives {P} points and {T} triangles, more "
+                                     f"than max_points={max_points}")
+        tp = topology
+        V, E, F = tp.n_vertices, tp.n_edges, tp.n_faces
+        fo, fv, sizes = tp.face_offsets, tp.face_vertices, tp.face_sizes
+        inner, tcount = _face_counts(sizes, r)
+        block = V + E * (r - 1) + np.concatenate([[0], np.cumsum(inner)[:-1]])
+        owner_corner = tp.star_corners[tp.star_offsets[:-1]]
+        first_he = tp.edge_halfedges[:, 0]
+
+        face_g, fan_g, uv_g = np.empty(P, dtype=np.int64), np.empty(P, dtype=np.int64), np.empty((P, 2))
+        parts = []  # (faces, G (nf, npt), template)
+        for n in np.unique(sizes).tolist():
+            fk = np.flatnonzero(sizes == n)
+            uv, fan, kind, loc, pos, canon, tris = _template(n, r)
+            nf, npt = len(fk), len(kind)
+            base = fo[fk][:, None]
+            G = np.empty((nf, npt), dtype=np.int64)
+            own = np.zeros((nf, npt), dtype=bool)
+            c = kind == _CORNER
+            h = base + loc[c]
+            G[:, c] = fv[h]
+            own[:, c] = canon[c] & (h == owner_corner[fv[h]])
+            c = kind == _EDGE
+            h = base + loc[c]
+            e = tp.halfedge_edge[h]
+            fwd = fv[h] == tp.edges[e, 0]
+            G[:, c] = V + e * (r - 1) + np.where(fwd, pos[c] - 1, r - 1 - pos[c])
+            own[:, c] = canon[c] & (h == first_he[e])
+            c = kind == _INTERIOR
+            G[:, c] = block[fk][:, None] + loc[c]
+            own[:, c] = canon[c]
+            sel = G[own]
+            face_g[sel] = np.broadcast_to(fk[:, None], G.shape)[own]
+            fan_g[sel] = np.broadcast_to(fan, G.shape)[own]
+            uv_g[sel] = np.broadcast_to(uv, G.shape + (2,))[own]
+            parts.append((fk, G, uv, fan, tris))
+
+        lf = np.concatenate([np.repeat(fk, G.shape[1]) for fk, G, *_ in parts])
+        lorder = np.argsort(lf, kind="stable")
+        self.local_face = _ro(lf[lorder])
+        self.local_sample = _ro(np.concatenate([G.ravel() for _, G, *_ in parts])[lorder])
+        self.local_fan = _ro(np.concatenate([np.tile(fan, len(fk)) for fk, _, _, fan, _ in parts])[lorder])
+        self.local_uv = _ro(np.concatenate([np.tile(uv, (len(fk), 1)) for fk, _, uv, *_ in parts])[lorder])
+        loff = np.zeros(F + 1, dtype=np.int64)
+        np.cumsum(np.bincount(lf, minlength=F), out=loff[1:])
+        self.local_offsets = _ro(loff)
+
+        tri = np.concatenate([G[:, tris].reshape(-1, 3) for _, G, _, _, tris in parts])
+        tface = np.concatenate([np.repeat(fk, len(tris)) for fk, _, _, _, tris in parts])
+        torder = np.argsort(tface, kind="stable")
+        self.triangles = _ro(tri[torder])
+        self.triangle_face = _ro(tface[torder])
+        self.face, self.fan, self.uv = _ro(face_g), _ro(fan_g), _ro(uv_g)
+        self.vertex_sample = _ro(np.arange(V, dtype=np.int64))
+        self.edge_samples = _ro(V + np.arange(E * (r - 1), dtype=np.int64).reshape(E, r - 1))
+        self.topology, self.resolution = tp, r
+        self.n_points, self.n_triangles = P, T
+        assert len(self.triangles) == T and int(tcount.sum()) == T
+
+    def face_groups(self) -> tuple[np.ndarray, np.ndarray]:
+        """(order (P,), offsets (F+1,)): ``order[offsets[f]:offsets[f+1]]`` are the samples
+        evaluated in face f (``face[p] == f``), for per-face batched evaluation."""
+        order = np.argsort(self.face, kind="stable")
+        off = np.zeros(self.topology.n_faces + 1, dtype=np.int64)
+        np.cumsum(np.bincount(self.face, minlength=self.topology.n_faces), out=off[1:])
+        return order, off
+
+    def map_to_polygon(self, corners2d, centers=None, local: bool = False) -> np.ndarray:
+        """Map samples into their faces' reference polygons (vectorized).
+
+        corners2d : (C, d) coordinates of every corner, aligned with
+            ``topology.face_vertices`` (d = 2 for reference polygons; any d works,
+            e.g. ``X[topology.face_vertices]`` for the piecewise-linear mesh in 3D).
+        centers : optional (F, d) fan centres of the n-gons (default: the mean of
+            their corners, inside every convex polygon).
+        local : map the local table (``local_face``, ...) instead of the samples.
+        Returns (P, d) (or (L, d)): triangles barycentric, quads bilinear, n-gons
+        barycentric in the fan triangle. Exact (affine/bilinear formulas).
+        """
+        tp = self.topology
+        X = np.asarray(corners2d, dtype=np.float64)
+        if X.ndim != 2 or X.shape[0] != tp.n_corners:
+            raise InvalidParameterError("corners2d", f"must have shape ({tp.n_corners}, d), got "
+                                        f"{X.shape}")
+        face, fan, uv = ((self.local_face, self.local_fan, self.local_uv) if local
+                         else (self.face, self.fan, self.uv))
+        fo, n = tp.face_offsets[face], tp.face_sizes[face]
+        a, b = uv[:, :1], uv[:, 1:]
+        out = np.empty((len(face), X.shape[1]))
+        s = n == 3
+        c = fo[s]
+        out[s] = (1 - a[s] - b[s]) * X[c] + a[s] * X[c + 1] + b[s] * X[c + 2]
+        s = n == 4
+        c = fo[s]
+        out[s] = ((1 - a[s]) * (1 - b[s]) * X[c] + a[s] * (1 - b[s]) * X[c + 1]
+                  + a[s] * b[s] * X[c + 2] + (1 - a[s]) * b[s] * X[c + 3])
+        s = n >= 5
+        if s.any():
+            if centers is None:
+                ctr = np.add.reduceat(X, tp.face_offsets[:-1], axis=0) / tp.face_sizes[:, None]
+            else:
+                ctr = np.asarray(centers, dtype=np.float64)
+                if ctr.shape != (tp.n_faces, X.shape[1]):
+                    raise InvalidParameterError("centers", f"must have shape ({tp.n_faces}, "
+                                                f"{X.shape[1]}), got {ctr.shape}")
+            k = fan[s]
+            c0 = fo[s] + k
+            c1 = fo[s] + (k + 1) % n[s]
+            out[s] = (1 - a[s] - b[s]) * ctr[face[s]] + a[s] * X[c0] + b[s] * X[c1]
+        return out
