@@ -59,7 +59,7 @@ class InvalidMeshError(GERBSValueError):
     """A polygon mesh cannot carry a blending surface.
 
     ``problem`` is a short machine-readable tag, one of ``"non_manifold_edge"``,
-    ``"non_manifold_vertex"``, ``"degenerate_face"``, ``"duplicate_face"``,
+    ``"inconsistent_orientation"``, ``"non_manifold_vertex"``, ``"degenerate_face"``, ``"duplicate_face"``,
     ``"repeated_index"``, ``"index_out_of_range"``, ``"unused_vertex"``,
     ``"non_finite"``, ``"empty"``, ``"zero_length_edge"``, ``"bad_shape"``;
     ``element`` says what ``indices`` count (``"vertex"``, ``"edge"``, ``"face"``).
