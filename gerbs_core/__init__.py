@@ -36,6 +36,9 @@ _LAZY = {
     # univariate GERBS splines (DESIGN section 2)
     "GERBSBasis": "curves",
     "GERBSCurve": "curves",
+    # smooth star gauge (DESIGN section 4)
+    "RadialEnvelope": "envelope",
+    "StarGauge": "gauge",
     # scattered points in R^n (DESIGN sections 3-4)
     "GERBSInterpolator": "hermite",
     # polygon-mesh blending surfaces (DESIGN section 5)
