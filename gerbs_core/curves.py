@@ -1,0 +1,282 @@
+"""Univariate GERBS splines: the basis of eq. (3) and curves c = sum_j G_j l_j.
+
+End convention (the paper's, Definition 2): the knot vector is
+t_0 < t_1 < ... < t_n < t_{n+1} (``knots``, length n + 2) and there are n basis
+functions G_1..G_n (columns 0..n-1 of the output), G_j supported on
+[t_{j-1}, t_{j+1}]:
+
+    G_j(t) = F_j(t)       for t in (t_{j-1}, t_j],
+           = 1 - F_{j+1}(t) for t in (t_j, t_{j+1}),
+           = 0            elsewhere,
+
+with F_k(t) = F((t - t_{k-1}) / (t_k - t_{k-1})) the kernel CDF moved to the
+knot interval [t_{k-1}, t_k]. Intervals are half-open (t_k, t_{k+1}] so that a
+left-continuous kernel (Step) gives left-continuous G_j. Properties (Lemma 3):
+sum_j G_j = 1 on [t_1, t_n] (up to one rounding), 0 <= G_j <= 1,
+G_j(t_k) = delta_jk for k = 1..n. Outside [t_1, t_n], G_1 and G_n fall to 0
+at t_0 and t_{n+1}: the curve with constant coefficients is the closed polygon
+0 -> P_1 -> ... -> P_n -> 0 of Lemma 3 (iv) on the whole line, and exactly the
+control polygon P_1 -> ... -> P_n on [t_1, t_n].
+
+The kernel may differ per knot interval (e.g. BFBS(i_k, i_{k+1}) of
+Definition 4): pass a sequence of n + 1 kernels, one per interval [t_k, t_{k+1}].
+
+Derivatives: G_j^(nu) on the interval [t_k, t_{k+1}] of length h is
++-F^(nu)(s) / h^nu (chain rule, exact given the kernel's derivatives).
+"""
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+
+from .errors import InvalidParameterError
+from .kernels import ERBS, Kernel
+from .kernels.base import as_float_array, check_order
+
+__all__ = ["GERBSBasis", "GERBSCurve"]
+
+
+def _check_knots(knots) -> np.ndarray:
+    k = np.array(knots, dtype=np.float64, copy=True) if not isinstance(knots, np.ndarray) \
+        else knots.astype(np.float64, copy=True)
+    if k.ndim != 1:
+        raise InvalidParameterError("knots", f"must be a 1-d array, got shape {k.shape}")
+    if k.size < 3:
+        raise InvalidParameterError(
+            "knots", f"need at least 3 knots (t_0, t_1, t_2) for one basis function, got {k.size}")
+    bad = np.flatnonzero(~np.isfinite(k))
+    if bad.size:
+        err = InvalidParameterError("knots", f"non-finite knots at indices {bad.tolist()[:10]}")
+        err.indices = tuple(int(i) for i in bad)
+        raise err
+    bad = np.flatnonzero(np.diff(k) <= 0.0)
+    if bad.size:
+        pairs = ", ".join(f"({i}, {i + 1})" for i in bad[:10].tolist())
+        err = InvalidParameterError(
+            "knots", f"must be strictly increasing; not increasing at index pairs {pairs}")
+        err.indices = tuple(int(i) + 1 for i in bad)
+        raise err
+    k.setflags(write=False)
+    return k
+
+
+def _check_kernels(kernel, n_intervals: int):
+    if isinstance(kernel, Kernel):
+        return (kernel,) * n_intervals, kernel
+    if isinstance(kernel, (str, bytes)) or not isinstance(kernel, Sequence):
+        raise InvalidParameterError(
+            "kernel", f"must be a Kernel or a sequence of Kernels, got {type(kernel).__name__}")
+    ks = tuple(kernel)
+    if len(ks) != n_intervals:
+        raise InvalidParameterError(
+            "kernel", f"need one kernel per knot interval ({n_intervals}), got {len(ks)}")
+    for i, k in enumerate(ks):
+        if not isinstance(k, Kernel):
+            raise InvalidParameterError("kernel", f"entry {i} is not a Kernel")
+    return ks, None
+
+
+class GERBSBasis:
+    """The GERBS basis G_1..G_n of eq. (3) on knots t_0 < ... < t_{n+1}.
+
+    Parameters
+    ----------
+    knots : (n + 2,) strictly increasing floats (n >= 1).
+    kernel : Kernel, or a sequence of n + 1 Kernels (one per knot interval).
+        Default ERBS().
+
+    ``basis(t, nu=0)`` -> array (*t.shape, n): G_j^(nu)(t) for j = 1..n.
+    Exactness: as exact as the kernel (ERBS values ~1e-15, derivatives to
+    rounding); the sum is 1 on [t_1, t_n] up to one rounding.
+    """
+
+    def __init__(self, knots, kernel: Kernel | Sequence[Kernel] | None = None):
+        self._knots = _check_knots(knots)
+        self._kernels, self._kernel = _check_kernels(
+            ERBS() if kernel is None else kernel, self._knots.size - 1)
+        self._h = np.diff(self._knots)
+
+    @property
+    def knots(self) -> np.ndarray:
+        """(n + 2,) the knot vector t_0..t_{n+1} (read-only)."""
+        return self._knots
+
+    @property
+    def n(self) -> int:
+        """Number of basis functions."""
+        return self._knots.size - 2
+
+    @property
+    def kernel(self):
+        """The common kernel, or the tuple of per-interval kernels."""
+        return self._kernel if self._kernel is not None else self._kernels
+
+    @property
+    def domain(self) -> tuple:
+        """(t_1, t_n): where the G_j form a partition of unity."""
+        return float(self._knots[1]), float(self._knots[-2])
+
+    @property
+    def max_order(self) -> int:
+        return min(k.max_order for k in self._kernels)
+
+    def support(self, j: int) -> tuple:
+        """[t_{j-1}, t_{j+1}] for column j (0-based: G_{j+1}), as a tuple."""
+        return float(self._knots[j]), float(self._knots[j + 2])
+
+    def active(self, t, nmax: int = 0):
+        """The (at most) two basis functions alive at each point, with derivatives.
+
+        Returns ``(k, fall, rise)`` for the flattened points: ``k`` (P,) int, the
+        knot interval (t_k, t_{k+1}] containing t (-1 left of t_0, n + 1 right of
+        t_{n+1}); ``fall`` (nmax+1, P) the derivatives of column k-1 (G_k, the
+        falling one) and ``rise`` (nmax+1, P) those of column k (G_{k+1}, rising).
+        Entries for non-existing columns are 0; NaN t gives NaN.
+        """
+        nmax = check_order(nmax, self.max_order, name="nu")
+        t = as_float_array(t).ravel()
+        kn = self._knots
+        k = np.searchsorted(kn, t, side="left") - 1      # t in (t_k, t_{k+1}]
+        nan = np.isnan(t)
+        k[nan] = 0
+        inside = (k >= 0) & (k <= self.n)
+        kc = np.clip(k, 0, self.n)
+        s = (t - kn[kc]) / self._h[kc]
+        rise = np.zeros((nmax + 1, t.size))
+        if self._kernel is not None:
+            rise[:, inside] = self._kernel.cdf_derivs(s[inside], nmax)
+        else:
+            for i, ker in enumerate(self._kernels):
+                sel = inside & (kc == i)
+                if sel.any():
+                    rise[:, sel] = ker.cdf_derivs(s[sel], nmax)
+        scale = 1.0 / self._h[kc]
+        for m in range(1, nmax + 1):
+            rise[m] *= scale ** m
+        fall = -rise
+        fall[0] += 1.0
+        fall[:, ~inside] = 0.0
+        # G_{n+1} and G_0 do not exist
+        rise[:, k == self.n] = 0.0
+        fall[:, k == 0] = 0.0
+        if nan.any():
+            rise[:, nan] = np.nan
+            fall[:, nan] = np.nan
+        return k, fall, rise
+
+    def __call__(self, t, nu: int = 0) -> np.ndarray:
+        """G_j^(nu)(t) for all j: array (*t.shape, n)."""
+        t = as_float_array(t)
+        k, fall, rise = self.active(t, nu)
+        P = k.size
+        out = np.zeros((P, self.n))
+        rows = np.arange(P)
+        ok = (k >= 0) & (k <= self.n - 1)
+        out[rows[ok], k[ok]] = rise[nu, ok]
+        ok = (k >= 1) & (k <= self.n)
+        out[rows[ok], k[ok] - 1] = fall[nu, ok]
+        nan = np.isnan(t.ravel())
+        out[nan] = np.nan
+        return out.reshape(t.shape + (self.n,))
+
+
+class GERBSCurve:
+    """GERBS curve c(t) = sum_j G_j(t) l_j(t) (eq. (3) basis, local curves l_j).
+
+    Parameters
+    ----------
+    knots : (n + 2,) strictly increasing (see :class:`GERBSBasis`).
+    local_curves : array (n, d) -- constant local curves l_j = P_j (the
+        control polygon of Lemma 3); or (n, m + 1, d) -- Taylor (Hermite) data:
+        local_curves[j, i] = l_j^(i)(t_j), l_j(t) = sum_i local_curves[j, i]
+        (t - t_j)^i / i!, the Taylor polynomial about the knot t_j = knots[j+1].
+    kernel : as for GERBSBasis (default ERBS()).
+
+    ``curve(t, nu=0)`` -> (*t.shape, d): c^(nu)(t) by the Leibniz rule
+    c^(nu) = sum_j sum_i binom(nu, i) G_j^(i) l_j^(nu - i) (exact given the
+    kernel). Hermite property: c^(i)(t_j) = local_curves[j, i] for every
+    i <= m whenever F^(r)(0) = F^(r)(1) = 0 for 1 <= r <= i (all orders for
+    ERBS and LogisticStep; r <= min(i_left, i_right) for BFBS; none for
+    Affine and Step, which reproduce values only).
+    """
+
+    def __init__(self, knots, local_curves, kernel: Kernel | Sequence[Kernel] | None = None,
+                 _nu0: int = 0):
+        self._basis = GERBSBasis(knots, kernel)
+        L = np.array(local_curves, dtype=np.float64)
+        n = self._basis.n
+        if L.ndim == 2:
+            L = L[:, None, :]
+        if L.ndim != 3 or L.shape[0] != n or L.shape[1] < 1 or L.shape[2] < 1:
+            raise InvalidParameterError(
+                "local_curves", f"expected shape (n, d) or (n, m+1, d) with n = {n} "
+                f"(len(knots) - 2), got {np.shape(local_curves)}")
+        bad = np.flatnonzero(~np.isfinite(L).all(axis=(1, 2)))
+        if bad.size:
+            err = InvalidParameterError(
+                "local_curves", f"non-finite data for local curves {bad.tolist()[:10]}")
+            err.indices = tuple(int(i) for i in bad)
+            raise err
+        L.setflags(write=False)
+        self._L = L
+        self._nu0 = int(_nu0)
+
+    @property
+    def basis(self) -> GERBSBasis:
+        return self._basis
+
+    @property
+    def knots(self) -> np.ndarray:
+        return self._basis.knots
+
+    @property
+    def local_curves(self) -> np.ndarray:
+        """(n, m + 1, d) Taylor data (constants are stored with m = 0), read-only."""
+        return self._L
+
+    @property
+    def dim(self) -> int:
+        return self._L.shape[2]
+
+    def derivative(self, nu: int = 1) -> "GERBSCurve":
+        """The curve t -> c^(nu)(t), as an object with the same interface."""
+        nu = check_order(nu, self._basis.max_order - self._nu0)
+        out = GERBSCurve.__new__(GERBSCurve)
+        out._basis, out._L, out._nu0 = self._basis, self._L, self._nu0 + nu
+        return out
+
+    def _local(self, j: np.ndarray, dt: np.ndarray, r: int) -> np.ndarray:
+        """l_j^(r)(t) for per-point local curve index j and dt = t - t_j: (P, d)."""
+        L = self._L
+        m = L.shape[1] - 1
+        out = np.zeros((j.size, L.shape[2]))
+        # l^(r)(t) = sum_{i >= r} L[j, i] dt^(i-r) / (i-r)!  (Horner from the top)
+        for i in range(m, r - 1, -1):
+            out *= dt[:, None] / (i - r + 1) if i < m else 1.0
+            out += L[j, i]
+        return out
+
+    def __call__(self, t, nu: int = 0) -> np.ndarray:
+        """c^(nu)(t): array (*t.shape, d)."""
+        nu = check_order(nu, self._basis.max_order - self._nu0)
+        nu += self._nu0
+        t = as_float_array(t)
+        k, fall, rise = self._basis.active(t, nu)
+        tf = t.ravel()
+        kn = self._basis.knots
+        n = self._basis.n
+        out = np.zeros((tf.size, self.dim))
+        # falling G_k (column k-1, centred at t_k = kn[k]); rising G_{k+1} (column k, at kn[k+1])
+        for G, col, centre in ((fall, k - 1, k), (rise, k, k + 1)):
+            ok = (col >= 0) & (col <= n - 1)
+            if not ok.any():
+                continue
+            j = col[ok]
+            dt = tf[ok] - kn[centre[ok]]
+            for i in range(nu + 1):
+                w = math.comb(nu, i) * G[i, ok]
+                out[ok] += w[:, None] * self._local(j, dt, nu - i)
+        out[np.isnan(tf)] = np.nan
+        return out.reshape(t.shape + (self.dim,))
