@@ -1,0 +1,233 @@
+"""Local functions: Taylor polynomials of Hermite data (paper section 2.6, item 1),
+local weighted least-squares derivative estimation, and the regularized
+(averaged) Taylor polynomial of Lemma 5.
+
+Derivative tensors are stored as a list ``D = [D0, D1, ..., Dm]`` with
+``Dk`` of shape (N, V, n, ..., n) (k trailing axes, symmetric), V the flattened
+trailing value shape: T_i(x) = sum_k Dk[i] (x - x_i)^k / k!.
+
+Derivative estimation (when gradients/Hessians are not given), per point x_i:
+
+* neighbours: the ``n_neighbors`` nearest other points (cKDTree; default
+  ceil(1.8 M) + 2, M = number of unknown coefficients), offsets scaled by
+  h_i = distance to the farthest of them: u_j = (x_j - x_i)/h_i;
+* model: f(x_j) - [known Taylor terms at x_i] = sum_{alpha unknown} c_alpha u_j^alpha/alpha!
+  over all multi-indices with 1 <= |alpha| <= fit_degree not given as data (the
+  value f_i is always kept exactly, so interpolation is not affected); when
+  gradients are given they are fitted too (equations h_i (grad f(x_j) - known terms));
+* weights w_j = (1 - (|u_j| / 1.2)^2)^2 (smooth, positive on the stencil);
+* batched normal equations with a tiny relative ridge (1e-12 x trace) for
+  degenerate stencils; D^alpha f(x_i) = c_alpha / h_i^|alpha|.
+
+Polynomials of degree <= fit_degree are reproduced exactly (up to rounding).
+"""
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import InvalidParameterError, InvalidPointSetError
+
+__all__ = ["multi_indices", "taylor_jet", "estimate_derivatives", "averaged_taylor", "tensors_from_coeffs"]
+
+
+def multi_indices(n, kmin, kmax):
+    """Multi-indices alpha (tuples of length n) with kmin <= |alpha| <= kmax, graded."""
+    out = []
+    for k in range(kmin, kmax + 1):
+        for combo in itertools.combinations_with_replacement(range(n), k):
+            a = [0] * n
+            for c in combo:
+                a[c] += 1
+            out.append(tuple(a))
+    return out
+
+
+def _alpha_of(idx_tuple, n):
+    a = [0] * n
+    for c in idx_tuple:
+        a[c] += 1
+    return tuple(a)
+
+
+def tensors_from_coeffs(coeffs, alphas, n, kmax):
+    """Symmetric tensors Dk (N, V, n^k) from partial derivatives D^alpha (N, V) per alpha."""
+    lookup = {a: c for a, c in zip(alphas, coeffs)}
+    N, V = coeffs[0].shape
+    out = {}
+    for k in range(1, kmax + 1):
+        if not any(sum(a) == k for a in alphas):
+            continue
+        T = np.zeros((N, V) + (n,) * k)
+        for idx in itertools.product(range(n), repeat=k):
+            T[(slice(None), slice(None)) + idx] = lookup[_alpha_of(idx, n)]
+        out[k] = T
+    return out
+
+
+def taylor_jet(D, d, nu):
+    """Value, gradient, Hessian of T(x) = sum_k Dk (d)^k / k! at offsets d = x - x_i.
+
+    ``D[k]`` has shape (..., V, n^k) broadcast-compatible with d (..., n).
+    Returns value (..., V), gradient (..., V, n), Hessian (..., V, n, n).
+    """
+    m = len(D) - 1
+    dd = d[..., None, :]                 # broadcast over V
+    v = D[0].copy()
+    g = np.zeros(D[0].shape + (d.shape[-1],)) if nu >= 1 else None
+    h = np.zeros(D[0].shape + (d.shape[-1],) * 2) if nu >= 2 else None
+    if g is not None:
+        g = np.broadcast_to(g, np.broadcast_shapes(g.shape, dd.shape)).copy()
+    if h is not None:
+        h = np.broadcast_to(h, np.broadcast_shapes(h.shape, dd.shape + (d.shape[-1],))).copy()
+    for k in range(1, m + 1):
+        A = D[k]
+        # contract trailing axes with d one at a time, keeping partial contractions
+        partial = [A]
+        for _ in range(k):
+            A = np.sum(A * dd.reshape(dd.shape[:-1] + (1,) * (A.ndim - dd.ndim) + (dd.shape[-1],)), axis=-1)
+            partial.append(A)
+        # partial[j]: D_k with j axes contracted -> (k - j) free axes
+        v = v + partial[k] / math.factorial(k)
+        if nu >= 1:
+            g = g + partial[k - 1] / math.factorial(k - 1)
+        if nu >= 2 and k >= 2:
+            h = h + partial[k - 2] / math.factorial(k - 2)
+    return v, g, h
+
+
+def _default_neighbors(M):
+    return int(math.ceil(1.8 * M)) + 2
+
+
+def _monomials(pw, alphas, fact):
+    """u^alpha / alpha! (..., M) for each alpha, from powers pw[k] = u^k of shape (n, ...)."""
+    out = np.empty((len(alphas),) + pw[0].shape[1:])
+    for j, a in enumerate(alphas):
+        m = pw[a[0]][0] * (1.0 / fact[j])
+        for k in range(1, len(a)):
+            if a[k]:
+                m *= pw[a[k]][k]
+        out[j] = m
+    return np.moveaxis(out, 0, -1)
+
+
+def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=None, chunk=20000):
+    """Estimate partial derivatives of orders known+1 .. fit_degree at every point.
+
+    ``D_known`` = [values (N, V), gradients (N, V, n)?, Hessians (N, V, n, n)?] as given
+    (known = len(D_known) - 1). Neighbour values, and neighbour gradients when given,
+    are fitted after subtracting the known Taylor terms at x_i.
+    Returns a dict k -> tensor (N, V, n^k) for k = known+1 .. fit_degree.
+    """
+    N, n = points.shape
+    known = len(D_known) - 1
+    alphas = multi_indices(n, known + 1, fit_degree)
+    M = len(alphas)
+    if M == 0:
+        return {}
+    K = _default_neighbors(M) if n_neighbors is None else int(n_neighbors)
+    if K < M:
+        raise InvalidParameterError("n_neighbors", f"need >= {M} neighbours for fit_degree {fit_degree}")
+    if N - 1 < M:
+        raise InvalidPointSetError(
+            f"points: {N} points are too few to estimate derivatives up to order {fit_degree} "
+            f"in n={n} (need at least {M + 1}); give derivatives or lower the degree")
+    K = min(K, N - 1)
+    tree = cKDTree(points) if tree is None else tree
+    V = D_known[0].shape[1]
+    expo = np.array(alphas, dtype=float)                       # (M, n)
+    fact = np.array([np.prod([math.factorial(a) for a in al]) for al in alphas])
+    order = expo.sum(1)
+    out_coeffs = np.empty((M, N, V))
+    for s in range(0, N, chunk):
+        e = min(N, s + chunk)
+        dist, nb = tree.query(points[s:e], k=K + 1)
+        dist, nb = dist[:, 1:], nb[:, 1:]
+        h = dist[:, -1]
+        dx = points[nb] - points[s:e, None, :]                                  # (c, K, n)
+        u = dx / h[:, None, None]
+        r = np.linalg.norm(u, axis=-1)
+        w = (1.0 - (r / 1.2) ** 2) ** 2
+        Dloc = [Dk[s:e, None] for Dk in D_known]                               # broadcast over K
+        Tv, Tg, _ = taylor_jet(Dloc, dx, 1 if known >= 1 else 0)
+        ut = np.ascontiguousarray(np.moveaxis(u, -1, 0))                       # (n, c, K)
+        pw = [np.ones(ut.shape)]
+        for _ in range(fit_degree):
+            pw.append(pw[-1] * ut)                                             # u^k per coordinate
+        A = [_monomials(pw, alphas, fact)]                                     # (c, K, M)
+        B = [D_known[0][nb] - Tv]                                              # (c, K, V)
+        W = [w]
+        if known >= 1:
+            # gradient equations: h (grad f(x_j) - grad T_known(x_j)) = sum c_a d/du_l (u^a/a!)
+            for l in range(n):
+                dal = [tuple(a[k] - (k == l) if a[k] > 0 or k != l else 0 for k in range(n)) for a in alphas]
+                coef = expo[:, l]
+                A.append(coef * _monomials(pw, dal, fact))
+                B.append(h[:, None, None] * (D_known[1][nb][..., l] - Tg[..., l]))
+                W.append(w)
+        A = np.concatenate(A, axis=1)
+        B = np.concatenate(B, axis=1)
+        W = np.concatenate(W, axis=1)
+        AW = A * W[:, :, None]
+        G = np.einsum("ckm,ckl->cml", AW, A, optimize=True)
+        tr = np.trace(G, axis1=1, axis2=2)
+        G += (1e-12 * tr / M)[:, None, None] * np.eye(M)
+        c = np.linalg.solve(G, np.einsum("ckm,ckv->cmv", AW, B, optimize=True))   # (c, M, V)
+        out_coeffs[:, s:e, :] = (c / h[:, None, None] ** order[None, :, None]).transpose(1, 0, 2)
+    return tensors_from_coeffs(list(out_coeffs), alphas, n, fit_degree)
+
+
+def averaged_taylor(func_jet, centers, radii, degree, n_quad=8):
+    """Regularized Taylor coefficients of Lemma 5 over balls D = B(x_i, r_i).
+
+    Q f(x) = int_D g(y) sum_{|alpha| <= degree} D^alpha f(y) (x - y)^alpha / alpha! dy,
+    g = 1/|D| on D (eq. (48); our ``degree`` is the paper's m - 1). Re-expanded
+    about x_i, Q f is a polynomial of degree ``degree`` whose derivative tensors at
+    x_i are returned like the data tensors of :func:`taylor_jet`. Needs the
+    derivatives of f at the quadrature nodes, so ``func_jet(y (..., n))`` must
+    return [f (..., V), grad (..., V, n), Hess (..., V, n, n)] up to ``degree``.
+
+    Quadrature (approximate, exact for polynomials of degree <= 2 n_quad - 1 - ...):
+    Gauss-Legendre product rule on the cube [-r, r]^n restricted to the ball by
+    a polar map in n = 2 (Gauss in r^1 dr, uniform in angle), and a masked tensor
+    Gauss rule otherwise (n_quad^n nodes).
+    """
+    centers = np.asarray(centers, float)
+    N, n = centers.shape
+    radii = np.broadcast_to(np.asarray(radii, float), (N,))
+    if degree > 2:
+        raise InvalidParameterError("degree", "averaged Taylor coefficients need degree <= 2")
+    if n == 2:
+        t, wt = np.polynomial.legendre.leggauss(n_quad)
+        rr = 0.5 * (t + 1.0)
+        wr = 0.5 * wt * rr                                    # int_0^1 r dr
+        na = 2 * n_quad + 1
+        ang = 2 * np.pi * np.arange(na) / na
+        nodes = (rr[:, None, None] * np.stack([np.cos(ang), np.sin(ang)], -1)[None]).reshape(-1, 2)
+        wq = np.repeat(wr, na) * (2 * np.pi / na) / np.pi     # normalised by |unit disc|
+    else:
+        t, wt = np.polynomial.legendre.leggauss(n_quad)
+        grid = np.array(list(itertools.product(t, repeat=n)))
+        wgrid = np.prod(np.array(list(itertools.product(wt, repeat=n))), axis=1)
+        inside = np.linalg.norm(grid, axis=1) <= 1.0
+        nodes, wq = grid[inside], wgrid[inside]
+        wq = wq / wq.sum()
+    y = centers[:, None, :] + radii[:, None, None] * nodes[None]          # (N, Q, n)
+    jets = func_jet(y)
+    # Taylor polynomial of f at y re-expanded at x_i: derivatives at x_i of
+    # P_y(x) = sum_k D^k f(y)(x - y)^k/k!: the j-th derivative is sum_{k>=j} D^k f(y)(x_i - y)^{k-j}/(k-j)!
+    d = centers[:, None, :] - y                                            # x_i - y
+    out = []
+    for j in range(degree + 1):
+        acc = 0.0
+        for k in range(j, degree + 1):
+            A = jets[k]
+            for _ in range(k - j):
+                A = np.sum(A * d.reshape(d.shape[:-1] + (1,) * (A.ndim - d.ndim) + (n,)), axis=-1)
+            acc = acc + A / math.factorial(k - j)
+        out.append(np.einsum("q,nq...->n...", wq, acc))
+    return out

@@ -1,0 +1,208 @@
+"""Planar star covers: supports inside the cover elements, smooth gauge (no jumps
+across the spokes of a Delaunay star, while the kinked exact radius is flagged),
+thickness diagnostics, Voronoi and user-polygon covers."""
+import numpy as np
+import pytest
+
+from gerbs_core import GERBSInterpolator
+from gerbs_core.diagnostics import cover_report
+
+RNG = np.random.default_rng(7)
+
+
+def f(p):
+    return np.sin(3 * p[..., 0]) * np.cos(2 * p[..., 1]) + p[..., 0] ** 3
+
+
+def _ext(a):
+    """Quadratic extrapolation to 0 from samples at h, 2h, 3h: the one-sided limit."""
+    return 3 * a[0] - 3 * a[1] + a[2]
+
+
+def spoke_jumps(interp, i, h=1e-4):
+    """Largest relative jump of the one-sided first and second derivatives of psi_i and
+    of the interpolant across every spoke of the star of vertex i.
+
+    The one-sided derivatives are the analytic derivatives at distance h, 2h, 3h on
+    each side of the spoke, extrapolated to the spoke (error O(h^3))."""
+    cov = interp.cover
+    out = np.zeros(4)
+    for e in np.flatnonzero(cov.edge_star == i):
+        rk = cov.rho_tilde(np.array([e]), np.array([0.0]))[0][0]
+        d = cov.a0[e] / np.linalg.norm(cov.a0[e])
+        xs = cov.centers[i] + 0.6 * rk * d                 # where psi_i is in transition
+        nrm = np.array([-d[1], d[0]])
+        s = np.array([1, 2, 3, -1, -2, -3]) * h
+        pts = xs + s[:, None] * nrm
+        _, g, H = cov.psi_jet(pts, np.full((6, 1), i), None, 2)
+        g, H = g[:, 0], H[:, 0]
+        Fg, FH = interp(pts, 1), interp(pts, 2)
+        for k, a in enumerate((g, H, Fg, FH)):
+            jump = np.abs(_ext(a[:3]) - _ext(a[3:])).max() / np.abs(a).max()
+            out[k] = max(out[k], jump)
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_no_jump_across_spokes_and_kinked_gauge_is_flagged(seed):
+    # h = 1e-4 must resolve the smooth transition of the GERBS envelope at a knot
+    # (the ERBS flat band there is ~1e-2 of a sub-interval): points in [0, 1000]^2.
+    rng = np.random.default_rng(seed)
+    P = rng.random((12, 2)) * 1000.0
+
+    def g(p):
+        return f(p / 1000.0)
+
+    smooth = GERBSInterpolator(P, g(P))
+    kinked = GERBSInterpolator(P, g(P), exact_gauge=True)
+    interior = [i for i in range(len(P)) if np.all(smooth.cover.next_edge[smooth.cover.edge_star == i] >= 0)]
+    assert interior
+    js = np.max([spoke_jumps(smooth, i) for i in interior], axis=0)
+    jk = np.max([spoke_jumps(kinked, i) for i in interior], axis=0)
+    assert np.all(js <= 1e-6), js
+    # psi_i of the exact polygon radius has kinks: first and second derivatives jump,
+    # for psi_i and (damped by the normalization and the smooth data) for the interpolant
+    assert jk[0] > 1e-2 and jk[1] > 1e-2, jk
+    assert jk[2] > 1e-3 and jk[3] > 1e-3, jk
+
+
+def test_support_inside_star_and_envelope_below_radius():
+    P = RNG.random((40, 2))
+    interp = GERBSInterpolator(P, f(P))
+    cov = interp.cover
+    # rho~ <= shrink * rho at many angles on every edge (DESIGN 4: supp psi_i in Omega_i)
+    E = len(cov.delta)
+    t = RNG.random((E, 20)) * cov.delta[:, None]
+    e = np.repeat(np.arange(E)[:, None], 20, 1)
+    rt = cov.rho_tilde(e.ravel(), t.ravel())[0]
+    rho = cov.p[e.ravel()] / np.cos(t.ravel() - cov.nu[e.ravel()])
+    assert np.all(rt <= cov.shrink * rho * (1 + 1e-12))
+    assert cov.kappa * (1 - 1e-12) <= cov.measured_kappa() <= 1
+    # psi_i vanishes on and outside the boundary of the star polygon of x_i
+    for i in range(len(P)):
+        es = np.flatnonzero(cov.edge_star == i)
+        q = cov.centers[i] + cov.a0[es]
+        q1 = cov.centers[i] + cov.a1[es]
+        lam = RNG.random((len(es), 5, 1))
+        bnd = (q[:, None] * (1 - lam) + q1[:, None] * lam).reshape(-1, 2)
+        for scale in (1.0, 1.05):
+            x = cov.centers[i] + scale * (bnd - cov.centers[i])
+            v = cov.psi_jet(x, np.full((len(x), 1), i), None, 0)[0]
+            assert np.all(v == 0.0)
+        # and is positive near its point
+        near = cov.centers[i] + 1e-3 * (bnd[:5] - cov.centers[i])
+        assert np.all(cov.psi_jet(near, np.full((5, 1), i), None, 0)[0] > 0.99)
+
+
+@pytest.mark.parametrize("cover", ["delaunay", "voronoi"])
+def test_thickness_reported_positive(cover):
+    P = RNG.random((50, 2)) * 0.9 + 0.05
+    interp = GERBSInterpolator(P, f(P), cover=cover)
+    rep = cover_report(interp, resolution=5)
+    assert rep["outside"] == 0
+    assert rep["eps0"] > 1e-6
+    assert rep["condition"] < 1e6 and rep["condition"] == pytest.approx(1 / rep["min_sum"])
+    assert 1 <= rep["max_overlap"] <= len(P)
+    # the kinked cover with the same shrink is no thicker than itself: sanity on eps0 definition
+    assert rep["eps0"] <= 1.0
+
+
+def test_voronoi_cover_is_minimally_supported():
+    """Doubled Voronoi cells: no other site lies in the interior of supp psi_i, so the
+    minimal basis B = Psi interpolates (Theorem 6)."""
+    P = RNG.random((30, 2)) * 0.8 + 0.1
+    interp = GERBSInterpolator(P, f(P), cover="voronoi")
+    idx, B, _, _ = interp.basis(P)
+    Bm = interp.basis_matrix(P)
+    assert np.allclose(Bm, np.eye(len(P)), atol=0, rtol=0)
+    # and it covers the whole domain square
+    lo, hi = interp.domain.min(0), interp.domain.max(0)
+    g = np.stack(np.meshgrid(np.linspace(lo[0], hi[0], 40), np.linspace(lo[1], hi[1], 40)), -1).reshape(-1, 2)
+    assert np.all(np.isfinite(interp(g)))
+    assert np.all(np.isnan(interp(np.array([[lo[0] - 1e-3, 0.5], [0.5, hi[1] + 1e-3]]))))
+
+
+def test_user_polygons():
+    """Squares around grid points (star-shaped, overlapping): partition of unity,
+    support inside each polygon, Hermite interpolation."""
+    xs = np.linspace(0, 1, 4)
+    P = np.stack(np.meshgrid(xs, xs), -1).reshape(-1, 2)
+    sq = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
+    x = RNG.random((500, 2))
+    # half-width 0.3 < spacing 1/3: minimally supported, B = Psi interpolates (Theorem 6)
+    # half-width 0.55: other points inside, the general basis (32) is needed (Theorem 2)
+    for half, basis in ((0.3, "minimal"), (0.3, "maximal"), (0.55, "general")):
+        interp = GERBSInterpolator(P, f(P), cover=[p + half * sq for p in P], basis=basis)
+        Bm = interp.basis_matrix(x)
+        ok = np.isfinite(Bm).all(1)
+        assert ok.all()
+        assert np.max(np.abs(Bm.sum(1) - 1)) <= 1e-14
+        outside = np.abs(x[:, None, :] - P[None]).max(-1) >= half
+        assert np.all(Bm[outside] == 0)
+        np.testing.assert_allclose(interp(P), f(P), rtol=0, atol=1e-14)
+    # B = Psi on a cover that is not minimally supported does not interpolate
+    bad = GERBSInterpolator(P, f(P), cover=[p + 0.55 * sq for p in P], basis="minimal")
+    assert np.abs(bad(P) - f(P)).max() > 1e-3
+    with pytest.raises(ValueError, match="star-shaped"):
+        GERBSInterpolator(P, f(P), cover=[p + 0.3 * sq[::-1] for p in P])     # clockwise
+
+
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_ball_cover_supports_and_guaranteed_thickness(n):
+    """cover='balls': supp B_i inside B(x_i, R_i); the automatic R gives
+    eps0 >= b(0.9) on the hull (radii.auto_R)."""
+    from gerbs_core.kernels import ERBS
+    P = RNG.random((30, n))
+    interp = GERBSInterpolator(P, f(np.pad(P, ((0, 0), (0, max(0, 2 - n))))), cover="balls")
+    rep = cover_report(interp, resolution=4)
+    assert rep["outside"] == 0
+    assert rep["eps0"] >= ERBS().bump(0.9) * (1 - 1e-12)
+    x = RNG.random((300, n))
+    Bm = interp.basis_matrix(x)
+    d = np.linalg.norm(x[:, None, :] - P[None], axis=-1)
+    ok = np.isfinite(Bm).all(1)
+    assert np.all(Bm[ok][d[ok] >= interp.R[None, :]] == 0)
+
+
+def test_batched_exact_gauge_matches_gauge_module():
+    """The batched planar gauge (covers.PlanarStarCover) and gauge.StarGauge compute
+    the same psi, gradient and Hessian for the exact polygon radius (their smooth
+    envelopes use different knot placements: equal parts in log-radius here)."""
+    from gerbs_core.covers import polygon_cover
+    from gerbs_core.gauge import StarGauge
+    from gerbs_core.kernels import ERBS
+    c = np.array([[0.1, 0.2]])
+    ang = np.sort(RNG.random(7)) * 2 * np.pi
+    ring = c[0] + np.stack([np.cos(ang), np.sin(ang)], -1) * (0.5 + RNG.random((7, 1)))
+    cov = polygon_cover(c, [ring], ERBS(), exact=True)
+    sg = StarGauge.from_polygon(c[0], ring, exact=True)
+    x = c[0] + RNG.normal(size=(2000, 2)) * 0.5
+    for nu in (0, 1, 2):
+        a = cov.psi_jet(x, np.zeros((2000, 1), int), None, nu)[nu][:, 0]
+        b = sg.psi(x, nu)
+        assert np.max(np.abs(a - b)) <= 1e-12 * np.abs(b).max()
+
+
+def test_one_sided_limits_on_the_spokes_unit_square():
+    """On the unit square, the exact one-sided limits at a spoke: the analytic jets of
+    psi_i evaluated ON the spoke with the formulas of the two adjacent triangles
+    (edges prev(e) and e). Equal for the GERBS envelope, different for the kink."""
+    P = RNG.random((40, 2))
+    for exact, expect_equal in ((False, True), (True, False)):
+        cov = GERBSInterpolator(P, f(P), exact_gauge=exact).cover
+        has_prev = np.flatnonzero(cov.prev_edge >= 0)
+        e = has_prev
+        q = cov.prev_edge[e]
+        rk = cov.rho_tilde(e, np.zeros(len(e)))[0]
+        x = cov.centers[cov.edge_star[e]] + 0.6 * rk[:, None] * cov.a0[e] / np.linalg.norm(cov.a0[e], axis=1)[:, None]
+        star = cov.edge_star[e][:, None]
+        right = cov.psi_jet(x, star, e[:, None], 2)
+        left = cov.psi_jet(x, star, q[:, None], 2)
+        for k in (1, 2):
+            jump = np.abs(right[k] - left[k]).reshape(len(e), -1).max(1)
+            size = np.abs(right[k]).reshape(len(e), -1).max(1)
+            rel = jump / np.maximum(size, 1e-300)
+            if expect_equal:
+                assert rel.max() <= 1e-10
+            else:
+                assert np.median(rel) > 1e-2
