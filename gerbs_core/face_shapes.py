@@ -1,0 +1,166 @@
+"""Face shapes: a planar convex reference polygon D_f for every face (DESIGN section 5).
+
+Every face f with n corners gets the *cyclic* polygon with f's edge lengths:
+all 1 in mode ``"regular"`` (topology only, like subdivision surfaces) or the 3D
+edge lengths of the rest positions in mode ``"metric"``. Shared edges then have
+equal lengths on both sides, so neighbouring faces glue isometrically, which is
+what makes the vertex charts (:mod:`gerbs_core.charts`) consistent.
+
+Frame of D_f ("face local coordinates"): corner 0 at the origin, edge 0 (corner 0
+-> corner 1) along +x, corners counter-clockwise. Triangles are placed exactly
+(law of cosines); n-gons (n >= 4) by solving for the circumradius R with
+bisection on t = L / (2R) (L the longest edge) to full double precision, both in
+the centred case (sum of half central angles = pi) and in the non-centred case
+(the centre lies outside, beyond the longest edge: the other half angles sum to
+the longest edge's half angle).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InvalidMeshError, InvalidParameterError
+
+__all__ = ["FaceShapes", "face_shapes", "cyclic_polygon"]
+
+MODES = ("regular", "metric")
+
+
+@dataclass(frozen=True)
+class FaceShapes:
+    """Reference polygons of all faces, stored per corner (CSR like the topology).
+
+    Attributes (C = number of corners = sum of face sizes):
+      corners (C, 2): corner positions in their face's local frame.
+      angles (C,): interior angle of D_f at each corner (radians, in (0, pi)).
+      lengths (C,): length of the edge from each corner to the next one of its face.
+      mode: "regular" or "metric".
+    """
+
+    corners: np.ndarray
+    angles: np.ndarray
+    lengths: np.ndarray
+    mode: str
+
+
+def cyclic_polygon(lengths: np.ndarray) -> np.ndarray:
+    """Cyclic convex polygons with given edge lengths, vectorized over polygons.
+
+    lengths (F, n), n >= 3, edge i from corner i to corner i+1. Returns corners
+    (F, n, 2) in the face frame (corner 0 at the origin, edge 0 along +x, ccw).
+    Exact for triangles; n-gons to ~1e-15 relative. Raises ValueError (via the
+    caller) when some edge is not shorter than the sum of the others (index list
+    returned by :func:`_degenerate`).
+    """
+    lengths = np.asarray(lengths, dtype=np.float64)
+    F, n = lengths.shape
+    if n == 3:
+        l0, l1, l2 = lengths[:, 0], lengths[:, 1], lengths[:, 2]
+        x = (l0 * l0 + l2 * l2 - l1 * l1) / (2.0 * l0)
+        y = np.sqrt(np.maximum(l2 * l2 - x * x, 0.0))
+        out = np.zeros((F, 3, 2))
+        out[:, 1, 0] = l0
+        out[:, 2, 0] = x
+        out[:, 2, 1] = y
+        return out
+    imax = np.argmax(lengths, axis=1)
+    L = lengths[np.arange(F), imax]
+    rel = lengths / L[:, None]  # in (0, 1]
+    others = np.ones((F, n), dtype=bool)
+    others[np.arange(F), imax] = False
+    relo = np.where(others, rel, 0.0)
+    # centred iff at R = L/2 (t = 1) the other half-angles already reach pi/2
+    centred = np.sum(np.arcsin(relo), axis=1) >= 0.5 * np.pi
+    lo = np.zeros(F)
+    hi = np.ones(F)
+    # f(t) = sum_others asin(t r_i) -/+ ... ; both branches are increasing in t
+    #   centred:     sum_others asin(t r_i) + asin(t) - pi  (root in (0, 1])
+    #   non-centred: sum_others asin(t r_i) - asin(t)       (root in (0, 1))
+    for _ in range(64):
+        t = 0.5 * (lo + hi)
+        s = np.sum(np.arcsin(t[:, None] * relo), axis=1)
+        f = np.where(centred, s + np.arcsin(t) - np.pi, s - np.arcsin(t))
+        if np.all(hi - lo <= 4e-16):
+            break
+        # centred: f increasing in t; non-centred: f < 0 near t=1, > 0 near t=0
+        go_left = np.where(centred, f > 0, f < 0)
+        hi = np.where(go_left, t, hi)
+        lo = np.where(go_left, lo, t)
+    t = 0.5 * (lo + hi)
+    R = L / (2.0 * t)
+    half = np.arcsin(np.clip(lengths / (2.0 * R[:, None]), -1.0, 1.0))
+    arcs = 2.0 * half
+    # the longest edge goes back along the short arc when the centre is outside
+    arcs[np.arange(F), imax] = np.where(centred, arcs[np.arange(F), imax],
+                                        -arcs[np.arange(F), imax])
+    ang = np.concatenate([np.zeros((F, 1)), np.cumsum(arcs[:, :-1], axis=1)], axis=1)
+    pts = R[:, None, None] * np.stack([np.cos(ang), np.sin(ang)], axis=-1)
+    # move to the face frame: corner 0 at the origin, edge 0 along +x
+    pts = pts - pts[:, :1, :]
+    e0 = pts[:, 1, :]
+    c, s = e0[:, 0] / lengths[:, 0], e0[:, 1] / lengths[:, 0]
+    x = c[:, None] * pts[..., 0] + s[:, None] * pts[..., 1]
+    y = -s[:, None] * pts[..., 0] + c[:, None] * pts[..., 1]
+    out = np.stack([x, y], axis=-1)
+    out[:, 0, :] = 0.0
+    out[:, 1, :] = [0.0, 0.0]
+    out[:, 1, 0] = lengths[:, 0]
+    return out
+
+
+def _corner_angles(corners: np.ndarray) -> np.ndarray:
+    """Interior angles (F, n) of ccw convex polygons (F, n, 2)."""
+    nxt = np.roll(corners, -1, axis=1) - corners
+    prv = np.roll(corners, 1, axis=1) - corners
+    cross = nxt[..., 0] * prv[..., 1] - nxt[..., 1] * prv[..., 0]
+    dot = np.sum(nxt * prv, axis=-1)
+    return np.arctan2(cross, dot)
+
+
+def face_shapes(face_offsets: np.ndarray, face_vertices: np.ndarray, mode: str = "regular",
+                positions: np.ndarray | None = None) -> FaceShapes:
+    """Reference polygons D_f for all faces (CSR faces: offsets (F+1,), corners (C,)).
+
+    mode "regular": unit edges; "metric": 3D edge lengths of `positions` (V,3)
+    (the rest positions). Raises InvalidParameterError for an unknown mode and
+    InvalidMeshError("degenerate_face") naming the faces whose edge lengths admit
+    no convex polygon (some edge >= sum of the others, or zero length).
+    """
+    if mode not in MODES:
+        raise InvalidParameterError("mode", f"must be one of {MODES}, got {mode!r}")
+    off = np.asarray(face_offsets, dtype=np.int64)
+    fv = np.asarray(face_vertices, dtype=np.int64)
+    F = len(off) - 1
+    sizes = np.diff(off)
+    C = len(fv)
+    nxt_corner = np.arange(C) + 1
+    nxt_corner[off[1:] - 1] = off[:-1]
+    if mode == "regular":
+        lengths = np.ones(C)
+    else:
+        if positions is None:
+            raise InvalidParameterError("positions", "metric mode needs positions")
+        P = np.asarray(positions, dtype=np.float64)
+        lengths = np.linalg.norm(P[fv[nxt_corner]] - P[fv], axis=1)
+    corners = np.zeros((C, 2))
+    angles = np.zeros(C)
+    bad = []
+    for n in np.unique(sizes):
+        fs = np.nonzero(sizes == n)[0]
+        idx = off[fs][:, None] + np.arange(n)[None, :]
+        ln = lengths[idx]
+        lmax = ln.max(axis=1)
+        degenerate = (ln.min(axis=1) <= 0) | ~(2.0 * lmax < ln.sum(axis=1) * (1 - 1e-12))
+        if np.any(degenerate):
+            bad.extend(fs[degenerate].tolist())
+            continue
+        pts = cyclic_polygon(ln)
+        corners[idx] = pts
+        angles[idx] = _corner_angles(pts)
+    if bad:
+        raise InvalidMeshError("degenerate_face",
+                               "faces whose edge lengths admit no convex polygon "
+                               "(an edge is not shorter than the sum of the others)",
+                               sorted(bad), "face")
+    return FaceShapes(corners, angles, lengths, mode)

@@ -1,0 +1,172 @@
+"""Benchmark GERBS blending surfaces against Blender's Subdivision Surface modifier.
+
+For Suzanne, an icosphere and a 32x32 quad grid at resolutions giving about 8k,
+32k and 126k output points: build time (BlendingSurface + stencil from scratch),
+update time (W @ X), memory (tracemalloc peak of the build), nnz per row; and,
+when ``import bpy`` works, Blender's Subdivision Surface modifier at the matching
+level (level L <-> resolution 2**L) in the same run: build = add the modifier and
+evaluate the depsgraph from scratch; update = move one vertex and evaluate again.
+Medians of repeats; ratios GERBS / Subsurf.
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/bench_surface.py [--repeats 5] [--tables]
+
+Cold builds clear the process-wide star-envelope memo first; warm builds reuse it
+(as a rebuild in a running Blender session does). --tables also prints the Franke F1
+convergence table (N = 100 ... 6400).
+"""
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import tracemalloc  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from gerbs_core import primitives as P  # noqa: E402
+from gerbs_core.charts import clear_envelope_cache  # noqa: E402
+from gerbs_core.mesh_surface import BlendingSurface  # noqa: E402
+
+
+def median_time(fn, repeats):
+    ts = []
+    out = None
+    for _ in range(repeats):
+        t = time.perf_counter()
+        out = fn()
+        ts.append(time.perf_counter() - t)
+    return statistics.median(ts), out
+
+
+def gerbs_case(V, F, r, repeats):
+    def build():
+        s = BlendingSurface(V, F)
+        return s, s.stencil(r)
+
+    def cold():
+        clear_envelope_cache()
+        return build()
+
+    build()  # warm-up (imports, kernel tables)
+    tb, (s, st) = median_time(cold, repeats)
+    tw, _ = median_time(build, repeats)
+    X = V.copy()
+    X[0] += 1e-3
+
+    def update():
+        return st.apply(X)
+
+    tu, _ = median_time(update, max(repeats, 20))
+    tracemalloc.start()
+    cold()
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return dict(points=st.matrix.shape[0], build=tb, warm=tw, update=tu, mem=peak / 1e6,
+                nnz=st.nnz_per_row, eps0=s.last_eps0)
+
+
+def blender_case(bpy, V, F, level, repeats):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mesh = bpy.data.meshes.new("bench")
+    mesh.from_pydata([tuple(map(float, v)) for v in V], [], [tuple(map(int, f)) for f in F])
+    mesh.update()
+    obj = bpy.data.objects.new("bench", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    dg = bpy.context.evaluated_depsgraph_get()
+    dg.update()
+    counts = []
+
+    def build():
+        for m in list(obj.modifiers):
+            obj.modifiers.remove(m)
+        dg.update()
+        t = time.perf_counter()
+        mod = obj.modifiers.new("subsurf", "SUBSURF")
+        mod.levels = level
+        mod.render_levels = level
+        dg.update()
+        n = len(obj.evaluated_get(dg).data.vertices)
+        counts.append(n)
+        return time.perf_counter() - t
+
+    build()
+    tb = statistics.median([build() for _ in range(repeats)])
+    step = [1e-3]
+
+    def update():
+        mesh.vertices[0].co.x += step[0]
+        step[0] = -step[0]
+        mesh.update()
+        t = time.perf_counter()
+        dg.update()
+        len(obj.evaluated_get(dg).data.vertices)
+        return time.perf_counter() - t
+
+    update()
+    tu = statistics.median([update() for _ in range(max(repeats, 10))])
+    return dict(points=counts[-1], build=tb, update=tu)
+
+
+def franke_table():
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "core"))
+    from test_surface_convergence import franke_errors
+    rows = []
+    for n in (10, 20, 40, 80):
+        t = time.perf_counter()
+        emax, erms = franke_errors(n)
+        rows.append((n * n, 1.0 / (n - 1), emax, erms, time.perf_counter() - t))
+    print("\nFranke F1, degree 2, metric mode on flat jittered Delaunay (resolution 4)")
+    print(f"{'N':>6} {'h':>8} {'max err':>10} {'order':>6} {'rms err':>10} {'order':>6} "
+          f"{'time s':>7}")
+    prev = None
+    for N, h, a, b, t in rows:
+        oa = ob = float("nan")
+        if prev:
+            oa = np.log(prev[2] / a) / np.log(prev[1] / h)
+            ob = np.log(prev[3] / b) / np.log(prev[1] / h)
+        print(f"{N:6d} {h:8.4f} {a:10.3e} {oa:6.2f} {b:10.3e} {ob:6.2f} {t:7.2f}")
+        prev = (N, h, a, b)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--tables", action="store_true")
+    args = ap.parse_args()
+    try:
+        import bpy  # noqa: F401
+    except ImportError:
+        bpy = None
+    meshes = {"suzanne": P.suzanne(), "icosphere(3)": P.icosphere(3), "grid 32x32": P.grid(32, 32)}
+    print("build: BlendingSurface + stencil from scratch (cold: envelope memo cleared; warm: "
+          "star envelopes memoized); update: W @ X; Subsurf (ss) at level L = log2 r")
+    print(f"{'mesh':13} {'L/r':>4} {'points':>7} {'build s':>8} {'warm s':>7} {'update ms':>9} "
+          f"{'mem MB':>7} "
+          f"{'nnz/row':>7} {'eps0':>6} | {'ss points':>9} {'ss build s':>10} {'ss upd ms':>9} | "
+          f"{'build x':>7} {'warm x':>6} {'update x':>8}")
+    for name, (V, F) in meshes.items():
+        for level in (2, 3, 4):
+            r = 2 ** level
+            g = gerbs_case(V, F, r, args.repeats)
+            line = (f"{name:13} {level}/{r:<2} {g['points']:7d} {g['build']:8.3f} {g['warm']:7.3f} "
+                    f"{g['update'] * 1e3:9.2f} {g['mem']:7.0f} {g['nnz']:7.1f} {g['eps0']:6.3f}")
+            if bpy is not None:
+                b = blender_case(bpy, V, F, level, args.repeats)
+                line += (f" | {b['points']:9d} {b['build']:10.3f} {b['update'] * 1e3:9.2f} | "
+                         f"{g['build'] / b['build']:7.2f} {g['warm'] / b['build']:6.2f} "
+                         f"{g['update'] / b['update']:8.3f}")
+            print(line, flush=True)
+    if args.tables:
+        franke_table()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,223 @@
+"""BlendingSurface: partition of unity, cover, interpolation, reproduction, errors (issue 4)."""
+import numpy as np
+import pytest
+
+from gerbs_core import primitives as P
+from gerbs_core.errors import InvalidMeshError, InvalidParameterError, ResourceLimitError
+from gerbs_core.mesh_surface import BlendingSurface
+from gerbs_core.tessellation import Lattice, output_counts
+
+MESHES = {
+    "tri_grid": P.grid(4, 4, kind="tri"),
+    "quad_grid": P.grid(4, 4),
+    "icosphere": P.icosphere(1),
+    "uv_sphere": P.uv_sphere(8, 6),
+    "mixed": P.mixed_mesh(),
+    "mixed_bent": P.mixed_mesh(bend=0.5),
+    "delaunay": P.delaunay_patch(30, 3),
+}
+_CACHE = {}
+
+
+def surface(name, mode="regular", **kw):
+    key = (name, mode, tuple(sorted(kw.items())))
+    if key not in _CACHE:
+        V, F = MESHES[name]
+        _CACHE[key] = BlendingSurface(V, F, mode=mode, **kw)
+    return _CACHE[key]
+
+
+def jittered_patch(n_side, seed=0, jitter=0.35):
+    """Flat Delaunay mesh of a jittered grid (boundary points evenly spaced: uniform h)."""
+    g = np.linspace(0.0, 1.0, n_side)
+    X, Y = np.meshgrid(g, g)
+    xy = np.stack([X.ravel(), Y.ravel()], 1)
+    inner = (xy > 1e-12).all(1) & (xy < 1 - 1e-12).all(1)
+    h = 1.0 / (n_side - 1)
+    xy[inner] += np.random.default_rng(seed).uniform(-jitter * h, jitter * h, (int(inner.sum()), 2))
+    return P.delaunay_patch(points=xy)
+
+
+def local_points(s, r=4):
+    lat = Lattice(s.topology, r)
+    return lat, lat.local_face, lat.map_to_polygon(s.shapes.corners, local=True)
+
+
+@pytest.mark.parametrize("name", sorted(MESHES))
+@pytest.mark.parametrize("mode", ["regular", "metric"])
+def test_partition_of_unity_and_cover(name, mode):
+    s = surface(name, mode)
+    lat, f, x = local_points(s)
+    verts, Psi, psi = s.partition(f, x)
+    assert np.abs(Psi.sum(1) - 1).max() <= 1e-14
+    assert Psi.min() >= 0 and Psi.max() <= 1
+    assert np.all(psi.max(1) > 0)          # every sample covered
+    assert s.eps0 > 0
+    print(f"eps0[{name},{mode}] = {s.eps0:.4f}")
+    # Psi_v = 1 exactly at its own vertex (supports of the others stay away)
+    at_v = np.isin(lat.local_sample, lat.vertex_sample)
+    assert np.all(Psi[at_v].max(1) == 1.0)
+
+
+@pytest.mark.parametrize("name", sorted(MESHES))
+def test_interpolates_vertices_from_every_face(name):
+    s = surface(name)
+    V = MESHES[name][0]
+    topo = s.topology
+    S = s.evaluate(topo.corner_face, s.shapes.corners)  # every corner, from its own face
+    assert np.abs(S - V[topo.face_vertices]).max() <= 1e-12
+    pts, tris, nrm = s.tessellate(3)
+    assert len(pts) == output_counts(topo, 3)[0]
+    assert np.abs(pts[:len(V)] - V).max() <= 1e-12
+    assert np.allclose(np.linalg.norm(nrm, axis=1), 1.0)
+
+
+@pytest.mark.parametrize("name", ["icosphere", "mixed_bent", "uv_sphere", "delaunay"])
+def test_derivatives_at_vertices_equal_local_function(name):
+    s = surface(name, "metric")
+    for v in range(0, s.topology.n_vertices, 3):
+        ang = np.linspace(0, 2 * np.pi, 7, endpoint=False) + 0.1
+        if s.charts.boundary[v]:
+            ang = np.linspace(0.05, 0.95, 5) * s.charts.scale[v] * s.charts.span[v]
+        y = 1e-3 * np.stack([np.cos(ang), np.sin(ang)], 1)
+        A = s.chart_evaluate(v, y, 2)
+        B = s.local_function(v, y, 2)
+        for a, b in zip(A, B):
+            assert np.abs(a - b).max() <= 1e-10 * max(1.0, np.abs(b).max())
+
+
+def test_sphere_normals_point_outward():
+    s = surface("icosphere")
+    pts, _, nrm = s.tessellate(4)
+    assert np.min(np.sum(pts * nrm, 1) / np.linalg.norm(pts, axis=1)) > 0.9
+
+
+@pytest.mark.parametrize("name", ["tri_grid", "icosphere", "delaunay", "mixed_bent"])
+def test_degree0_keeps_triangle_samples_in_their_plane(name):
+    V, F = MESHES[name]
+    s = BlendingSurface(V, F, degree=0)
+    lat = Lattice(s.topology, 5)
+    pts = s.evaluate(lat.local_face, lat.map_to_polygon(s.shapes.corners, local=True))
+    topo = s.topology
+    tri = topo.face_sizes[lat.local_face] == 3
+    c = topo.face_offsets[lat.local_face[tri]][:, None] + np.arange(3)
+    T = V[topo.face_vertices[c]]
+    n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    assert tri.sum() > 0
+    assert np.abs(np.sum((pts[tri] - T[:, 0]) * n, 1)).max() <= 1e-12
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_flat_metric_reproduces_polynomial_graphs(degree):
+    V, F = P.delaunay_patch(80, 5)
+    flat = V.copy()
+    p = {1: lambda x, y: 0.3 + 0.5 * x - 0.7 * y,
+         2: lambda x, y: 0.3 + 0.5 * x - 0.7 * y + 1.1 * x * x - 0.8 * x * y + 0.6 * y * y}[degree]
+    X = flat.copy()
+    X[:, 2] = p(X[:, 0], X[:, 1])
+    s = BlendingSurface(X, F, degree=degree, mode="metric", rest_positions=flat, boundary="keep")
+    pts, _, _ = s.tessellate(5)
+    assert np.abs(pts[:, 2] - p(pts[:, 0], pts[:, 1])).max() <= 1e-10
+
+
+def test_graph_lengths_reproduction_error_is_third_order():
+    p = lambda x, y: 0.3 + 0.5 * x - 0.7 * y + 1.1 * x * x - 0.8 * x * y + 0.6 * y * y  # noqa
+    rows = []
+    for n_side in (6, 11, 21):
+        V, F = jittered_patch(n_side, 1)
+        X = V.copy()
+        X[:, 2] = p(X[:, 0], X[:, 1])
+        s = BlendingSurface(X, F, degree=2, mode="metric")  # the graph's own 3D lengths
+        pts, _, _ = s.tessellate(4)
+        rows.append((1.0 / (n_side - 1), np.abs(pts[:, 2] - p(pts[:, 0], pts[:, 1])).max()))
+    orders = [np.log(e0 / e1) / np.log(h0 / h1) for (h0, e0), (h1, e1) in zip(rows, rows[1:])]
+    print("h, max error:", rows, "orders:", orders)
+    assert min(orders) >= 2.6
+
+
+def test_evaluate_derivatives_match_finite_differences():
+    s = surface("mixed_bent", "metric")
+    topo = s.topology
+    f = np.arange(topo.n_faces)
+    ctr = np.add.reduceat(s.shapes.corners, topo.face_offsets[:-1], 0) / topo.face_sizes[:, None]
+    x = 0.6 * ctr + 0.4 * s.shapes.corners[topo.face_offsets[:-1] + 1]
+    S, dS, HS = s.evaluate_all(f, x, 2)
+    h = 1e-5
+    for j in range(2):
+        e = np.zeros(2)
+        e[j] = h
+        Sp, dp = s.evaluate_all(f, x + e, 1)
+        Sm, dm = s.evaluate_all(f, x - e, 1)
+        assert np.abs((Sp - Sm) / (2 * h) - dS[..., j]).max() < 1e-7
+        assert np.abs((dp - dm) / (2 * h) - HS[..., j]).max() < 1e-5 * max(1.0, np.abs(HS).max())
+    assert np.array_equal(s.evaluate(f, x, 1), dS)
+
+
+def test_bad_input_and_caller_arrays_untouched():
+    V, F = P.grid(3, 3)
+    V0, F0 = V.copy(), F.copy()
+    s = BlendingSurface(V, F, mode="metric")
+    s.tessellate(2)
+    s.stencil(2)
+    assert np.array_equal(V, V0) and np.array_equal(F, F0)
+    # non-manifold edge: three faces on one edge
+    with pytest.raises(InvalidMeshError) as e:
+        BlendingSurface(np.random.default_rng(0).normal(size=(5, 3)),
+                        [[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    assert e.value.problem in ("non_manifold_edge", "inconsistent_orientation") and e.value.indices
+    with pytest.raises(InvalidMeshError) as e:
+        BlendingSurface(np.vstack([V, [[9, 9, 9]]]), F)
+    assert e.value.problem == "unused_vertex" and e.value.indices == (len(V),)
+    bad = V.copy()
+    bad[4] = np.nan
+    with pytest.raises(InvalidMeshError) as e:
+        BlendingSurface(bad, F)
+    assert e.value.problem == "non_finite" and 4 in e.value.indices
+    with pytest.raises(InvalidParameterError, match="mode"):
+        BlendingSurface(V, F, mode="conformal")
+    with pytest.raises(InvalidParameterError, match="boundary"):
+        BlendingSurface(V, F, boundary="round")
+    with pytest.raises(InvalidParameterError, match="nu"):
+        s.evaluate(0, [0.1, 0.1], nu=3)
+    with pytest.raises(InvalidParameterError, match="rest_positions"):
+        BlendingSurface(V, F, rest_positions=V[:3])
+    small = BlendingSurface(V, F, memory_budget=1e6)
+    with pytest.raises(ResourceLimitError, match="estimated memory"):
+        small.tessellate(200)
+    with pytest.raises(ResourceLimitError, match="MB"):
+        small.stencil(200)
+
+
+def test_vertex_normals_as_hermite_data():
+    V, F = P.icosphere(1)
+    n = V / np.linalg.norm(V, axis=1, keepdims=True)  # exact sphere normals
+    tilt = n + 0.3 * np.roll(n, 1, axis=1)             # deliberately different normals
+    for normals in (n, tilt):
+        s = BlendingSurface(V, F, normals=normals)
+        nn = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+        for v in range(0, len(V), 5):
+            y = 1e-4 * np.array([[1.0, 0.3], [-0.2, 1.0]])
+            J = s.chart_evaluate(v, y, 1)[1]            # dS/dy near v: tangent to n_v
+            assert np.abs(np.einsum("pcj,c->pj", J, nn[v])).max() <= 1e-3 * np.abs(J).max()
+        pts, _, _ = s.tessellate(3)
+        assert np.abs(pts[:len(V)] - V).max() <= 1e-12
+    with pytest.raises(InvalidParameterError, match="normals"):
+        s.stencil(2)
+    with pytest.raises(InvalidParameterError, match="normals"):
+        BlendingSurface(V, F, normals=np.zeros_like(V))
+
+
+@pytest.mark.parametrize("name", ["mixed_bent", "delaunay", "tri_grid"])
+@pytest.mark.parametrize("degree", [1, 3])
+def test_straighten_rule_and_other_degrees(name, degree):
+    V, F = MESHES[name]
+    s = BlendingSurface(V, F, degree=degree, boundary="straighten")
+    lat, f, x = local_points(s, 3)
+    verts, Psi, psi = s.partition(f, x)
+    assert np.abs(Psi.sum(1) - 1).max() <= 1e-14 and s.eps0 > 0
+    pts, _, _ = s.tessellate(3)
+    assert np.abs(pts[:len(V)] - V).max() <= 1e-12
+    assert np.abs(s.stencil(3).apply(V) - pts).max() <= 1e-12
+    b = np.flatnonzero(s.topology.vertex_is_boundary)
+    assert np.allclose(s.charts.scale[b] * s.charts.span[b], np.pi)

@@ -1,0 +1,53 @@
+"""Convergence on Franke's F1 over flat Delaunay triangulations (metric mode, DESIGN 5).
+
+Vertex data (x, y, F1(x, y)) over a jittered-grid Delaunay triangulation of the
+unit square with N = n^2 points; the flat layout is the rest geometry (metric
+mode, boundary keep), so S = (x, y, s(x, y)) and the error is |s - F1| at the
+tessellation samples. The full table up to N = 6400 is in scripts/bench_surface.py.
+"""
+import numpy as np
+
+from gerbs_core import primitives as P
+from gerbs_core.mesh_surface import BlendingSurface
+
+
+def franke(x, y):
+    return (0.75 * np.exp(-((9 * x - 2) ** 2 + (9 * y - 2) ** 2) / 4)
+            + 0.75 * np.exp(-(9 * x + 1) ** 2 / 49 - (9 * y + 1) / 10)
+            + 0.5 * np.exp(-((9 * x - 7) ** 2 + (9 * y - 3) ** 2) / 4)
+            - 0.2 * np.exp(-(9 * x - 4) ** 2 - (9 * y - 7) ** 2))
+
+
+def jittered_patch(n_side, seed=0, jitter=0.35):
+    """Flat Delaunay mesh of a jittered grid (boundary points evenly spaced: uniform h)."""
+    g = np.linspace(0.0, 1.0, n_side)
+    X, Y = np.meshgrid(g, g)
+    xy = np.stack([X.ravel(), Y.ravel()], 1)
+    inner = (xy > 1e-12).all(1) & (xy < 1 - 1e-12).all(1)
+    h = 1.0 / (n_side - 1)
+    xy[inner] += np.random.default_rng(seed).uniform(-jitter * h, jitter * h, (int(inner.sum()), 2))
+    return P.delaunay_patch(points=xy)
+
+
+def franke_errors(n_side, degree=2, resolution=4, seed=2):
+    V, F = jittered_patch(n_side, seed)
+    X = V.copy()
+    X[:, 2] = franke(V[:, 0], V[:, 1])
+    s = BlendingSurface(X, F, degree=degree, mode="metric", rest_positions=V, boundary="keep")
+    pts, _, _ = s.tessellate(resolution)
+    # flat rest layout: the surface's (x, y) are exactly the planar points
+    e = np.abs(pts[:, 2] - franke(pts[:, 0], pts[:, 1]))
+    return e.max(), np.sqrt(np.mean(e ** 2))
+
+
+def test_franke_f1_converges_at_order_at_least_two():
+    sides = [10, 20, 40]  # N = 100, 400, 1600
+    rows = [(1.0 / (n - 1),) + franke_errors(n) for n in sides]
+    h, emax, erms = map(np.array, zip(*rows))
+    slope_max = np.polyfit(np.log(h), np.log(emax), 1)[0]
+    slope_rms = np.polyfit(np.log(h), np.log(erms), 1)[0]
+    for n, r in zip(sides, rows):
+        print(f"N={n * n:5d} h={r[0]:.4f} max={r[1]:.3e} rms={r[2]:.3e}")
+    print(f"observed order: max {slope_max:.2f}, rms {slope_rms:.2f}")
+    assert slope_max >= 2.0 and slope_rms >= 2.5
+    assert np.all(np.diff(emax) < 0) and np.all(np.diff(erms) < 0)
