@@ -1,0 +1,93 @@
+"""Every identifier and name the add-on uses, in one place.
+
+Operators, panels, menus, property groups, the Geometry Nodes group and its
+sockets, and the custom-property tags on data-blocks are all spelled here, so a
+rename is a one-line change and tests can refer to the same constants.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+ADDON_ID = "gerbs_blending_surface"  # extension id (blender_manifest.toml)
+ADDON_NAME = "GERBS Blending Surface"
+
+# --- operators (bl_idname) ------------------------------------------------------
+OP_ADD = "object.gerbs_add_surface"
+OP_APPLY = "object.gerbs_apply"
+OP_REBUILD = "object.gerbs_rebuild"
+OP_REMOVE = "object.gerbs_remove"
+
+# --- UI -------------------------------------------------------------------------
+PANEL_STATUS = "GERBS_PT_status"
+MENU_PARENT = "OBJECT_MT_modifier_add_generate"  # Add Modifier > Generate (bpy 5.0.1)
+MENU_LABEL = "GERBS Blending Surface"
+MENU_ICON = "MOD_SUBSURF"
+
+# --- scene property group -------------------------------------------------------
+SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
+
+# --- Geometry Nodes group and modifier ------------------------------------------
+NODE_GROUP_NAME = "GERBS Blending Surface"
+MODIFIER_NAME = "GERBS Blending Surface"
+GROUP_TAG = "gerbs_group_version"  # custom property on the node group
+GROUP_VERSION = 1
+RESULT_TAG = "gerbs_result"  # custom property on each hidden result object
+RESULT_NAME = "GERBS Result"  # prefix of the result object / mesh names
+
+# enum-like settings: python value -> menu item label (in this order)
+KERNELS = {"erbs": "ERBS", "bfbs": "BFBS", "logistic": "Logistic", "affine": "Affine"}
+MODES = {"regular": "Regular", "metric": "Metric"}
+BOUNDARIES = {"keep": "Keep", "straighten": "Straighten"}
+
+
+@dataclass(frozen=True)
+class SocketSpec:
+    """One input of the node group: a setting of the surface (or internal state)."""
+
+    key: str  # keyword in api.add_surface(**settings)
+    name: str  # socket name shown in the modifier panel
+    socket_type: str
+    default: object = None
+    min: float | None = None
+    max: float | None = None
+    description: str = ""
+    items: dict | None = None  # menu sockets: python value -> label
+    hidden: bool = False  # internal: not shown in the modifier panel
+
+
+SETTINGS = (
+    SocketSpec("kernel", "Kernel", "NodeSocketMenu", "erbs", items=KERNELS,
+               description="Univariate GERBS kernel F of the partition of unity"),
+    SocketSpec("alpha", "Alpha", "NodeSocketFloat", 1.0, 0.01, 100.0,
+               "ERBS intrinsic parameter alpha"),
+    SocketSpec("beta", "Beta", "NodeSocketFloat", 1.0, 0.01, 100.0,
+               "ERBS intrinsic parameter beta"),
+    SocketSpec("gamma", "Gamma", "NodeSocketFloat", 1.0, 0.01, 100.0,
+               "ERBS intrinsic parameter gamma"),
+    SocketSpec("lam", "Lambda", "NodeSocketFloat", 0.5, 0.0, 1.0,
+               "ERBS intrinsic parameter lambda"),
+    SocketSpec("sigma", "Sigma", "NodeSocketFloat", 1.0, 0.0, 100.0,
+               "ERBS intrinsic parameter sigma"),
+    SocketSpec("bfbs_left", "BFBS Left", "NodeSocketInt", 2, 0, 16,
+               "BFBS kernel exponent i_left (F = regularized incomplete beta I_t(i+1, j+1))"),
+    SocketSpec("bfbs_right", "BFBS Right", "NodeSocketInt", 2, 0, 16,
+               "BFBS kernel exponent i_right"),
+    SocketSpec("degree", "Degree", "NodeSocketInt", 2, 0, 3,
+               "Degree of the local polynomial functions"),
+    SocketSpec("resolution", "Resolution", "NodeSocketInt", 4, 1, 64,
+               "Segments per mesh edge in the output tessellation"),
+    SocketSpec("mode", "Face Shape", "NodeSocketMenu", "regular", items=MODES,
+               description="Regular: topology only (like subdivision); Metric: 3D edge lengths"),
+    SocketSpec("boundary", "Boundary", "NodeSocketMenu", "keep", items=BOUNDARIES,
+               description="Boundary vertices: keep the corners or straighten the border"),
+    SocketSpec("use_normals", "Use Custom Normals", "NodeSocketBool", False,
+               description="Use the base mesh's vertex normals as Hermite data"),
+)
+INTERNAL = (
+    SocketSpec("result", "Result", "NodeSocketObject", hidden=True,
+               description="Hidden object holding the surface (written by the add-on)"),
+    SocketSpec("error", "Error", "NodeSocketString", "", hidden=True,
+               description="Last error of the add-on; shown as a node warning"),
+)
+SETTING_KEYS = tuple(s.key for s in SETTINGS)
+DEFAULTS = {s.key: s.default for s in SETTINGS}

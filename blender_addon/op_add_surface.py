@@ -1,0 +1,40 @@
+"""OBJECT_OT_gerbs_add_surface: add the GERBS Blending Surface modifier (menu entry)."""
+from __future__ import annotations
+
+import bpy
+
+from . import api, ids
+from .progress import Progress
+from .properties import settings_annotations, settings_from
+
+
+class OBJECT_OT_gerbs_add_surface(bpy.types.Operator):
+    """Add a GERBS Blending Surface modifier: a C-infinity surface through the mesh vertices"""
+
+    bl_idname = ids.OP_ADD
+    bl_label = "GERBS Blending Surface"
+    bl_options = {"REGISTER", "UNDO"}
+    __annotations__ = settings_annotations()
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.active_object if hasattr(context, "active_object") else None
+        return obj is not None and obj.type == "MESH"
+
+    def execute(self, context):
+        obj = context.active_object
+        with Progress(window_manager=context.window_manager) as progress:
+            try:
+                mod = api.add_surface(obj, progress=progress, raise_errors=False,
+                                      **settings_from(self))
+            except ValueError as exc:
+                self.report({"ERROR"}, str(exc))
+                return {"CANCELLED"}
+        status = api.status(obj, mod)
+        if status["error"]:
+            # modifier kept (fix the mesh and it updates live); base mesh untouched
+            self.report({"ERROR"}, status["error"])
+            return {"FINISHED"}
+        self.report({"INFO"}, f"GERBS surface: {status.get('points', 0)} points, "
+                              f"{status.get('build_seconds', 0.0):.2f} s")
+        return {"FINISHED"}

@@ -1,0 +1,30 @@
+"""OBJECT_OT_gerbs_rebuild: rebuild the surface from scratch (rebinds metric rest lengths)."""
+from __future__ import annotations
+
+import bpy
+
+from . import api, ids
+from .progress import Progress
+
+
+class OBJECT_OT_gerbs_rebuild(bpy.types.Operator):
+    """Rebuild the GERBS surface and its stencil from the current mesh"""
+
+    bl_idname = ids.OP_REBUILD
+    bl_label = "Rebuild GERBS Surface"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        obj = getattr(context, "active_object", None)
+        return obj is not None and api.get_modifier(obj) is not None
+
+    def execute(self, context):
+        obj = context.active_object
+        with Progress(window_manager=context.window_manager) as progress:
+            results = api.update(obj, force=True, progress=progress, raise_errors=False)
+        errors = [r.message for r in results if r.status == "error"]
+        if errors:
+            self.report({"ERROR"}, "; ".join(errors))
+            return {"CANCELLED"}
+        return {"FINISHED"}

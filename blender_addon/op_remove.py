@@ -1,0 +1,23 @@
+"""OBJECT_OT_gerbs_remove: remove the GERBS modifier and its hidden result object."""
+from __future__ import annotations
+
+import bpy
+
+from . import api, ids
+
+
+class OBJECT_OT_gerbs_remove(bpy.types.Operator):
+    """Remove the GERBS Blending Surface modifier (the base mesh is unchanged)"""
+
+    bl_idname = ids.OP_REMOVE
+    bl_label = "Remove GERBS Surface"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        obj = getattr(context, "active_object", None)
+        return obj is not None and api.get_modifier(obj) is not None
+
+    def execute(self, context):
+        api.remove(context.active_object)
+        return {"FINISHED"}

@@ -1,0 +1,65 @@
+"""Property definitions: the scene-level add-on state and the settings as bpy.props.
+
+The surface settings themselves live on each modifier (node group inputs); the
+same settings are offered as operator properties (``settings_annotations``) so
+``bpy.ops.object.gerbs_add_surface(resolution=3, kernel="LOGISTIC")`` works.
+"""
+from __future__ import annotations
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
+
+from . import ids
+
+
+def settings_annotations() -> dict:
+    """bpy.props for every setting (menus as enums with upper-case identifiers)."""
+    out = {}
+    for spec in ids.SETTINGS:
+        if spec.items:
+            items = [(k.upper(), label, "") for k, label in spec.items.items()]
+            out[spec.key] = EnumProperty(name=spec.name, description=spec.description,
+                                         items=items, default=spec.default.upper())
+        elif spec.socket_type == "NodeSocketFloat":
+            out[spec.key] = FloatProperty(name=spec.name, description=spec.description,
+                                          default=spec.default, min=spec.min, max=spec.max)
+        elif spec.socket_type == "NodeSocketInt":
+            out[spec.key] = IntProperty(name=spec.name, description=spec.description,
+                                        default=spec.default, min=spec.min, max=spec.max)
+        else:
+            out[spec.key] = BoolProperty(name=spec.name, description=spec.description,
+                                         default=spec.default)
+    return out
+
+
+def settings_from(props) -> dict:
+    """Settings dict (api keywords) from an operator's properties."""
+    out = {}
+    for spec in ids.SETTINGS:
+        value = getattr(props, spec.key)
+        out[spec.key] = value.lower() if spec.items else value
+    return out
+
+
+class GERBS_PG_scene(bpy.types.PropertyGroup):
+    """Add-on state stored on the scene."""
+
+    live_update: BoolProperty(
+        name="Live Update", default=True,
+        description="Recompute GERBS surfaces whenever the base mesh or settings change")
+
+
+CLASSES = (GERBS_PG_scene,)
+
+
+def register() -> None:
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    setattr(bpy.types.Scene, ids.SCENE_PROP, bpy.props.PointerProperty(type=GERBS_PG_scene))
+
+
+def unregister() -> None:
+    if hasattr(bpy.types.Scene, ids.SCENE_PROP):
+        delattr(bpy.types.Scene, ids.SCENE_PROP)
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,170 @@
+#!/usr/bin/env python
+"""GERBS modifier vs Blender's Subdivision Surface modifier, in one bpy run.
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/bench_blender.py [--repeats 5] [--quick]
+
+For Suzanne, an icosphere and a 32x32 grid, and Subsurf levels giving ~30k and
+~120k output vertices, the GERBS resolution is the one whose output vertex
+count is closest to Subsurf's (both counts printed; must agree within 5%).
+Times (medians of repeats, seconds), each including the depsgraph evaluation
+and access to the evaluated mesh's positions:
+  build   add the modifier to a mesh without one, evaluate
+  1 vert  move one base vertex, evaluate
+  all     move every base vertex, evaluate
+Targets (issue 5): GERBS update <= 0.5x Subsurf at ~120k vertices; build <= 4x.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+
+def median_time(fn, repeats):
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def make_objects(bpy):
+    bpy.ops.wm.obj_import(filepath=str(ROOT / "examples" / "suzanne.obj"))
+    suzanne = bpy.context.selected_objects[0]
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=3, radius=1.0)
+    ico = bpy.context.active_object
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=32, y_subdivisions=32, size=2.0)
+    grid = bpy.context.active_object
+    return {"suzanne": suzanne, "icosphere": ico, "grid 32x32": grid}
+
+
+def evaluated_positions(bpy, obj):
+    dg = bpy.context.evaluated_depsgraph_get()
+    dg.update()
+    mesh = obj.evaluated_get(dg).data
+    buf = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.attributes["position"].data.foreach_get("vector", buf)
+    return buf
+
+
+def subsurf_count(bpy, obj, level):
+    mod = obj.modifiers.new("bench", "SUBSURF")
+    mod.levels = level
+    n = len(evaluated_positions(bpy, obj)) // 3
+    obj.modifiers.remove(mod)
+    return n
+
+
+def closest_resolution(obj, target):
+    from blender_addon import mesh_io
+    from gerbs_core.mesh_topology import MeshTopology
+    from gerbs_core.tessellation import output_counts
+
+    offsets, corners = mesh_io.read_topology(obj.data)
+    topo = MeshTopology(mesh_io.faces_from_csr(offsets, corners), len(obj.data.vertices))
+    best = min(range(1, 65), key=lambda r: abs(output_counts(topo, r)[0] - target))
+    return best, output_counts(topo, best)[0]
+
+
+class Mover:
+    """Moves base vertices through the position attribute (same for both modifiers)."""
+
+    def __init__(self, obj):
+        self.mesh = obj.data
+        self.X = np.empty(len(self.mesh.vertices) * 3, dtype=np.float32)
+        self.mesh.attributes["position"].data.foreach_get("vector", self.X)
+        self.k = 0
+
+    def one(self):
+        self.k += 1
+        self.X[0] += 1e-3 * (-1) ** self.k
+        self._write()
+
+    def all(self):
+        self.k += 1
+        self.X += 1e-3 * (-1) ** self.k
+        self._write()
+
+    def _write(self):
+        self.mesh.attributes["position"].data.foreach_set("vector", self.X)
+        self.mesh.update()
+
+
+def bench_pair(bpy, obj, level, repeats):
+    from blender_addon import api
+
+    n_sub = subsurf_count(bpy, obj, level)
+    r, n_gerbs = closest_resolution(obj, n_sub)
+    rows = {}
+    mover = Mover(obj)
+
+    def sub_build():
+        mod = obj.modifiers.new("bench", "SUBSURF")
+        mod.levels = level
+        evaluated_positions(bpy, obj)
+
+    def sub_clear():
+        obj.modifiers.clear()
+        evaluated_positions(bpy, obj)
+
+    def gerbs_build():
+        api.add_surface(obj, resolution=r)
+        evaluated_positions(bpy, obj)
+
+    def gerbs_clear():
+        api.remove(obj)
+        evaluated_positions(bpy, obj)
+
+    for name, build, clear in (("subsurf", sub_build, sub_clear), ("gerbs", gerbs_build, gerbs_clear)):
+        times = []
+        for _ in range(max(2, repeats // 2)):
+            clear()
+            t0 = time.perf_counter()
+            build()
+            times.append(time.perf_counter() - t0)
+        build_t = statistics.median(times)
+        evaluated_positions(bpy, obj)
+        one = median_time(lambda: (mover.one(), evaluated_positions(bpy, obj)), repeats)
+        allv = median_time(lambda: (mover.all(), evaluated_positions(bpy, obj)), repeats)
+        rows[name] = (build_t, one, allv)
+        clear()
+    return n_sub, n_gerbs, r, rows
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--quick", action="store_true", help="only the ~30k level")
+    args = ap.parse_args(argv)
+    import bpy
+
+    import blender_addon
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    blender_addon.register()
+    objects = make_objects(bpy)
+    levels = {"suzanne": (3, 4), "icosphere": (3, 4), "grid 32x32": (3, 4)}
+    print(f"{'mesh':<11} {'lvl':>3} {'subsurf pts':>11} {'r':>3} {'gerbs pts':>10} {'diff':>6} | "
+          f"{'build S':>8} {'build G':>8} {'G/S':>5} | {'1vert S':>8} {'1vert G':>8} {'G/S':>5} | "
+          f"{'all S':>8} {'all G':>8} {'G/S':>5}")
+    for name, obj in objects.items():
+        for level in levels[name][: 1 if args.quick else 2]:
+            n_sub, n_g, r, rows = bench_pair(bpy, obj, level, args.repeats)
+            (bs, os_, as_), (bg, og, ag) = rows["subsurf"], rows["gerbs"]
+            print(f"{name:<11} {level:>3} {n_sub:>11} {r:>3} {n_g:>10} {100 * (n_g - n_sub) / n_sub:>5.1f}% | "
+                  f"{bs:>8.4f} {bg:>8.4f} {bg / bs:>5.2f} | {os_:>8.4f} {og:>8.4f} {og / os_:>5.2f} | "
+                  f"{as_:>8.4f} {ag:>8.4f} {ag / as_:>5.2f}", flush=True)
+    blender_addon.unregister()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,276 @@
+"""Live update: locality of an edit, W @ X fast path, rebuilds, Edit Mode, undo/redo."""
+import bmesh
+from mathutils import Vector
+import bpy
+import numpy as np
+import pytest
+
+from .helpers import evaluated, face_rings, make_object, positions, topology
+
+pytestmark = pytest.mark.blender
+
+R = 3
+
+
+def _sample_rings(obj, r, w):
+    """Smallest face ring (about vertex w) among the faces each output sample lies on."""
+    from blender_addon.mesh_io import faces_from_csr
+    from gerbs_core.mesh_topology import MeshTopology
+    from gerbs_core.tessellation import Lattice
+
+    offsets, corners = topology(obj.data)
+    lat = Lattice(MeshTopology(faces_from_csr(offsets, corners), len(obj.data.vertices)), r)
+    ring = face_rings(offsets, corners, len(obj.data.vertices), w)
+    out = np.full(lat.n_points, np.iinfo(np.int64).max)
+    np.minimum.at(out, lat.local_sample, ring[lat.local_face])
+    return out
+
+
+@pytest.mark.parametrize("kind,w", [("suzanne", 100), ("icosphere", 7), ("mixed", 12)])
+def test_moving_one_vertex_changes_only_its_3_ring(blender, kind, w):
+    """Locality (gerbs_core.stencil): X_w enters l_u for u with w in u's fit data N_u
+    (N_u within the star of u plus up to two enlargement layers), and S on a face
+    blends the l_u of its corners; together: only faces within the 3-ring of w
+    (ring 1 = faces at w, ring k+1 = faces sharing a vertex with ring k) change.
+    The changed samples must also be exactly those the core's stencil column says."""
+    from blender_addon import api, engine
+
+    obj = make_object(kind)
+    mod = api.add_surface(obj, resolution=R)
+    P0 = evaluated(obj)
+    W = engine.get_state(obj, mod).matrix.tocsc()
+    obj.data.vertices[w].co.x += 0.05
+    obj.data.update()
+    P1 = evaluated(obj)
+    changed = np.flatnonzero(np.abs(P1 - P0).max(axis=1) > 0)
+    rings = _sample_rings(obj, R, w)
+    assert len(changed) > 0
+    assert rings[changed].max() <= 3
+    column = W[:, w]
+    depends = set(column.indices.tolist())
+    strong = set(column.indices[np.abs(column.data) > 1e-6].tolist())
+    assert set(changed.tolist()) <= depends      # nothing outside the stencil's support moved
+    assert strong <= set(changed.tolist())       # everything with a real weight moved
+    assert rings[sorted(depends)].max() <= 3
+
+
+def test_fast_path_reuses_stencil_and_matches_rebuild(blender):
+    from blender_addon import api, engine
+
+    obj = make_object("suzanne")
+    mod = api.add_surface(obj, resolution=R)
+    st = engine.get_state(obj, mod)
+    X = positions(obj.data)
+    rng = np.random.default_rng(1)
+    X2 = (X + 0.02 * rng.standard_normal(X.shape)).astype(np.float32)
+    obj.data.attributes["position"].data.foreach_set("vector", X2.ravel())
+    obj.data.update()
+    P_fast = evaluated(obj)
+    assert engine.get_state(obj, mod) is st  # same state object: only W @ X ran
+    assert np.array_equal(st.positions, X2.astype(np.float64))
+    results = api.update(obj, force=True)  # full rebuild from the moved mesh
+    assert results[0].status == "rebuilt"
+    P_full = evaluated(obj)
+    assert engine.get_state(obj, mod) is not st
+    assert np.abs(P_fast - P_full).max() <= 1e-6  # regular mode: W depends on topology only
+
+
+def test_topology_change_rebuilds(blender):
+    from blender_addon import api
+
+    obj = make_object("grid")
+    api.add_surface(obj, resolution=2)
+    n0 = len(evaluated(obj))
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    bmesh.ops.subdivide_edges(bm, edges=bm.edges[:], cuts=1, use_grid_fill=True)
+    bm.to_mesh(obj.data)
+    bm.free()
+    obj.data.update()
+    n1 = len(evaluated(obj))
+    assert n1 > n0
+    X = positions(obj.data)
+    assert np.abs(evaluated(obj)[: len(X)] - X).max() <= 1e-6
+
+
+def test_edit_mode_edits_update_live(blender):
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    api.add_surface(obj, resolution=2)
+    P0 = evaluated(obj)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bm = bmesh.from_edit_mesh(obj.data)
+    bm.verts.ensure_lookup_table()
+    bm.verts[3].co.z += 0.2
+    target = bm.verts[3].co.copy()
+    bmesh.update_edit_mesh(obj.data)
+    P1 = evaluated(obj)
+    assert np.abs(P1[3] - np.array(target)).max() <= 1e-6  # still interpolates the moved vertex
+    assert np.abs(P1 - P0).max() > 0.05
+    # topology edit in Edit Mode: delete a face -> rebuild with a boundary
+    bm.faces.ensure_lookup_table()
+    bmesh.ops.delete(bm, geom=[bm.faces[0]], context="FACES_ONLY")
+    bmesh.update_edit_mesh(obj.data)
+    P2 = evaluated(obj)
+    assert len(P2) == len(P1)  # samples of the deleted face interior: none at r=2
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert len(obj.data.polygons) == 79
+    assert np.abs(evaluated(obj) - P2).max() == 0.0
+
+
+def test_undo_redo_resync(blender):
+    """Undo works headless once undo_steps > 0 and steps are pushed (ed.undo_push)."""
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    name = obj.name
+    api.add_surface(obj, resolution=2)
+    P0 = evaluated(obj)
+    bpy.ops.ed.undo_push(message="surface added")
+    obj.data.vertices[5].co.z += 0.3
+    obj.data.update()
+    P1 = evaluated(obj)
+    bpy.ops.ed.undo_push(message="vertex moved")
+    assert np.abs(P1 - P0).max() > 0.05
+    assert bpy.ops.ed.undo() == {"FINISHED"}
+    obj = bpy.data.objects[name]  # undo re-creates the Python wrappers
+    assert np.abs(evaluated(obj) - P0).max() <= 1e-7
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    obj = bpy.data.objects[name]
+    assert np.abs(evaluated(obj) - P1).max() <= 1e-7
+    # and live update still works after undo/redo
+    obj.data.vertices[5].co.z -= 0.3
+    obj.data.update()
+    assert np.abs(evaluated(obj) - P0).max() <= 1e-6
+
+
+def test_undo_across_add_and_remove(blender):
+    from blender_addon import api
+
+    obj = make_object("grid")
+    name = obj.name
+    X = positions(obj.data)
+    bpy.ops.ed.undo_push(message="start")
+    api.add_surface(obj, resolution=2)
+    P = evaluated(obj)
+    bpy.ops.ed.undo_push(message="added")
+    api.remove(obj)
+    bpy.ops.ed.undo_push(message="removed")
+    assert np.array_equal(evaluated(obj), X)
+    bpy.ops.ed.undo()
+    obj = bpy.data.objects[name]
+    assert np.abs(evaluated(obj) - P).max() <= 1e-7
+    bpy.ops.ed.undo()
+    obj = bpy.data.objects[name]
+    assert len(obj.modifiers) == 0 and np.array_equal(evaluated(obj), X)
+
+
+def test_one_edit_one_sync_no_feedback_loop(blender):
+    """Writing the result triggers depsgraph updates; they must not re-run the work."""
+    from blender_addon import api, engine
+
+    obj = make_object("icosphere")
+    api.add_surface(obj, resolution=2)
+    evaluated(obj)
+    before = dict(engine.stats)
+    obj.data.vertices[0].co.x += 0.1
+    obj.data.update()
+    evaluated(obj)
+    for _ in range(3):
+        obj.update_tag()  # unrelated updates: compared, nothing written
+        evaluated(obj)
+    after = engine.stats
+    assert after["updated"] - before.get("updated", 0) == 1
+    assert after["rebuilt"] - before.get("rebuilt", 0) == 0
+    assert after["unchanged"] - before.get("unchanged", 0) >= 3
+
+
+def test_metric_mode_keeps_rest_lengths_until_rebuild(blender):
+    """Mode metric binds the rest edge lengths at build time: edits are W @ X with the
+    bound charts; the Rebuild operator rebinds to the current shape (DESIGN 5)."""
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    api.add_surface(obj, resolution=3, mode="metric")
+    X = positions(obj.data)
+    X2 = X * np.array([1.0, 1.0, 3.0])  # stretch: edge lengths change
+    obj.data.attributes["position"].data.foreach_set("vector", X2.astype(np.float32).ravel())
+    obj.data.update()
+    P_bound = evaluated(obj)
+    assert np.abs(P_bound[: len(X)] - X2).max() <= 1e-5
+    assert bpy.ops.object.gerbs_rebuild() == {"FINISHED"}
+    P_rebound = evaluated(obj)
+    assert np.abs(P_rebound[: len(X)] - X2).max() <= 1e-5
+    assert np.abs(P_rebound - P_bound).max() > 1e-3  # new rest lengths, new surface
+
+
+def test_undo_apply_brings_the_modifier_back(blender):
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    name = obj.name
+    X = positions(obj.data)
+    api.add_surface(obj, resolution=2)
+    P = evaluated(obj)
+    bpy.ops.ed.undo_push(message="added")
+    api.apply(obj)
+    bpy.ops.ed.undo_push(message="applied")
+    assert len(obj.modifiers) == 0 and np.abs(positions(obj.data) - P).max() == 0.0
+    bpy.ops.ed.undo()
+    obj = bpy.data.objects[name]
+    assert len(obj.modifiers) == 1 and np.array_equal(positions(obj.data), X)
+    assert np.abs(evaluated(obj) - P).max() <= 1e-7
+    obj.data.vertices[0].co.z += 0.2  # live again on the restored modifier
+    obj.data.update()
+    assert np.abs(evaluated(obj)[0] - positions(obj.data)[0]).max() <= 1e-6
+    bpy.ops.ed.redo()
+    obj = bpy.data.objects[name]
+    assert len(obj.modifiers) == 0
+
+
+def test_single_vertex_drags_update_locally_and_match_a_full_product(blender):
+    """A drag moves one vertex at a time: only that vertex's column of W is applied
+    (P += W[:, v] dX_v); after many such steps the result equals W @ X."""
+    from blender_addon import api, engine
+
+    obj = make_object("suzanne")
+    mod = api.add_surface(obj, resolution=R)
+    rng = np.random.default_rng(7)
+    for step in range(20):
+        v = int(rng.integers(len(obj.data.vertices)))
+        obj.data.vertices[v].co += Vector(rng.normal(size=3) * 0.01)
+        obj.data.update()
+        P = evaluated(obj)
+    st = engine.get_state(obj, mod)
+    assert st.partial_updates == 20  # every step took the local path
+    X = positions(obj.data)
+    assert np.abs(P - st.matrix @ X).max() <= 1e-6
+    assert np.abs(P[: len(X)] - X).max() <= 1e-6
+
+
+def test_custom_normals_setting_builds_hermite_surface_and_stays_live(blender):
+    """Use Custom Normals passes the vertex normals as Hermite data: not W @ X, so
+    every edit rebuilds (tessellate), and the surface still interpolates."""
+    from blender_addon import api, engine
+
+    obj = make_object("icosphere")
+    # an ellipsoid: on the round sphere the fitted tangent planes are already normal
+    # to the (radial) vertex normals, and the two surfaces would coincide
+    X0 = positions(obj.data) * np.array([1.0, 1.6, 0.6])
+    obj.data.attributes["position"].data.foreach_set("vector", X0.astype(np.float32).ravel())
+    obj.data.update()
+    mod = api.add_surface(obj, resolution=3)
+    P_plain = evaluated(obj)
+    api.set_settings(obj, use_normals=True)
+    P_normals = evaluated(obj)
+    X = positions(obj.data)
+    assert api.status(obj)["error"] == "" and engine.get_state(obj, mod).matrix is None
+    assert np.abs(P_normals[: len(X)] - X).max() <= 1e-6
+    assert np.abs(P_normals - P_plain).max() > 1e-4
+    before = engine.stats["rebuilt"]
+    obj.data.vertices[2].co.z += 0.2
+    obj.data.update()
+    P2 = evaluated(obj)
+    assert engine.stats["rebuilt"] == before + 1
+    assert np.abs(P2[2] - positions(obj.data)[2]).max() <= 1e-6
