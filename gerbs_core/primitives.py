@@ -16,7 +16,7 @@ import numpy as np
 from .errors import InvalidParameterError
 from .obj_io import read_obj
 
-__all__ = ["icosphere", "uv_sphere", "grid", "mixed_mesh", "delaunay_patch", "suzanne",
+__all__ = ["icosphere", "uv_sphere", "grid", "mixed_mesh", "delaunay_patch", "jittered_patch", "suzanne",
            "SUZANNE_PATH"]
 
 SUZANNE_PATH = Path(__file__).resolve().parent.parent / "examples" / "suzanne.obj"
@@ -187,6 +187,24 @@ def delaunay_patch(n_points: int = 100, seed: int = 0, points=None):
     tri[area2 < 0] = tri[area2 < 0][:, [0, 2, 1]]
     v = np.concatenate([xy, np.zeros((len(xy), 1))], 1)
     return v, tri
+
+
+def jittered_patch(n_side: int, seed: int = 0, jitter: float = 0.35):
+    """Flat Delaunay mesh of a jittered ``n_side x n_side`` grid on the unit square.
+
+    Boundary points stay evenly spaced and interior points move by at most
+    ``jitter * h`` (h = 1/(n_side-1)) in each coordinate, so the mesh size is
+    uniform (h) everywhere, unlike :func:`delaunay_patch`, whose boundary
+    triangles never refine. Used for convergence studies.
+    """
+    n = _check_int("n_side", n_side, 2)
+    g = np.linspace(0.0, 1.0, n)
+    X, Y = np.meshgrid(g, g)
+    xy = np.stack([X.ravel(), Y.ravel()], 1)
+    inner = (xy > 1e-12).all(1) & (xy < 1 - 1e-12).all(1)
+    h = 1.0 / (n - 1)
+    xy[inner] += np.random.default_rng(seed).uniform(-jitter * h, jitter * h, (int(inner.sum()), 2))
+    return delaunay_patch(points=xy)
 
 
 def suzanne():

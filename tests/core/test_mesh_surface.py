@@ -27,17 +27,6 @@ def surface(name, mode="regular", **kw):
     return _CACHE[key]
 
 
-def jittered_patch(n_side, seed=0, jitter=0.35):
-    """Flat Delaunay mesh of a jittered grid (boundary points evenly spaced: uniform h)."""
-    g = np.linspace(0.0, 1.0, n_side)
-    X, Y = np.meshgrid(g, g)
-    xy = np.stack([X.ravel(), Y.ravel()], 1)
-    inner = (xy > 1e-12).all(1) & (xy < 1 - 1e-12).all(1)
-    h = 1.0 / (n_side - 1)
-    xy[inner] += np.random.default_rng(seed).uniform(-jitter * h, jitter * h, (int(inner.sum()), 2))
-    return P.delaunay_patch(points=xy)
-
-
 def local_points(s, r=4):
     lat = Lattice(s.topology, r)
     return lat, lat.local_face, lat.map_to_polygon(s.shapes.corners, local=True)
@@ -125,7 +114,7 @@ def test_graph_lengths_reproduction_error_is_third_order():
     p = lambda x, y: 0.3 + 0.5 * x - 0.7 * y + 1.1 * x * x - 0.8 * x * y + 0.6 * y * y  # noqa
     rows = []
     for n_side in (6, 11, 21):
-        V, F = jittered_patch(n_side, 1)
+        V, F = P.jittered_patch(n_side, 1)
         X = V.copy()
         X[:, 2] = p(X[:, 0], X[:, 1])
         s = BlendingSurface(X, F, degree=2, mode="metric")  # the graph's own 3D lengths

@@ -8,29 +8,17 @@ tessellation samples. The full table up to N = 6400 is in scripts/bench_surface.
 import numpy as np
 
 from gerbs_core import primitives as P
+from gerbs_core.franke import franke as franke_function
 from gerbs_core.mesh_surface import BlendingSurface
 
 
 def franke(x, y):
-    return (0.75 * np.exp(-((9 * x - 2) ** 2 + (9 * y - 2) ** 2) / 4)
-            + 0.75 * np.exp(-(9 * x + 1) ** 2 / 49 - (9 * y + 1) / 10)
-            + 0.5 * np.exp(-((9 * x - 7) ** 2 + (9 * y - 3) ** 2) / 4)
-            - 0.2 * np.exp(-(9 * x - 4) ** 2 - (9 * y - 7) ** 2))
-
-
-def jittered_patch(n_side, seed=0, jitter=0.35):
-    """Flat Delaunay mesh of a jittered grid (boundary points evenly spaced: uniform h)."""
-    g = np.linspace(0.0, 1.0, n_side)
-    X, Y = np.meshgrid(g, g)
-    xy = np.stack([X.ravel(), Y.ravel()], 1)
-    inner = (xy > 1e-12).all(1) & (xy < 1 - 1e-12).all(1)
-    h = 1.0 / (n_side - 1)
-    xy[inner] += np.random.default_rng(seed).uniform(-jitter * h, jitter * h, (int(inner.sum()), 2))
-    return P.delaunay_patch(points=xy)
+    """Franke's F1 (the shared reference implementation)."""
+    return franke_function(1, np.stack([x, y], axis=-1))
 
 
 def franke_errors(n_side, degree=2, resolution=4, seed=2):
-    V, F = jittered_patch(n_side, seed)
+    V, F = P.jittered_patch(n_side, seed)
     X = V.copy()
     X[:, 2] = franke(V[:, 0], V[:, 1])
     s = BlendingSurface(X, F, degree=degree, mode="metric", rest_positions=V, boundary="keep")
