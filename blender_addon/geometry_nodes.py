@@ -170,6 +170,8 @@ def write_settings(mod, **settings) -> None:
             raise ValueError(f"unknown GERBS setting {key!r}; expected one of {sorted(specs)}")
         if spec.items:
             values = _menu_values(group, spec)
+            # the operators' enums spell items in upper case ("LOGISTIC"): accept both
+            value = value.lower() if isinstance(value, str) else value
             if value not in values:
                 raise ValueError(f"{key}: expected one of {sorted(values)}, got {value!r}")
             mod[keys[spec.name]] = values[value]
