@@ -165,29 +165,32 @@ def fit_local_functions(topo, charts, corners2d: np.ndarray, degree: int = 2,
     cache = {}  # equal data layouts (e.g. mode regular) share one solve
     deg_of = E.sum(axis=1)
     results = []
+    # plain Python lists for the per-vertex loop (numpy scalars are slow here)
+    sc_l, so_l, cf_l = sc.tolist(), so.tolist(), corner_face.tolist()
+    off_l, twin_l = off.tolist(), twin.tolist()
+    face_v = np.split(fv, off[1:-1])
+    face_v = [a.tolist() for a in face_v]
     for v in range(V):
         s = charts.scale[v]
         placed = {}  # face -> (complex positions of its corners (n,), theta_ref)
-        ids, ys = [], []
+        ids, yc, yi = [], [], []
         seen = {v}
         frontier = []
-        for c in sc[so[v]:so[v + 1]]:
-            f = corner_face[c]
-            n = sizes[f]
-            z = zall[c, :n]
-            tref = tref_all[c]
-            placed[f] = (z, tref)
+        for c in sc_l[so_l[v]:so_l[v + 1]]:
+            f = cf_l[c]
+            placed[f] = c  # (positions, theta_ref) made on demand from zall, tref_all
             frontier.append(f)
-            yy = yall[c]
-            for i, qv in enumerate(fv[off[f]:off[f + 1]].tolist()):
+            for i, qv in enumerate(face_v[f]):
                 if qv not in seen:
                     seen.add(qv)
                     ids.append(qv)
-                    ys.append(yy[i])
+                    yc.append(c)
+                    yi.append(i)
         n0 = len(ids)
+        Y = yall[yc, yi].reshape(-1, 2)
+        ys = None
         layers = 0
         while True:
-            Y = np.array(ys).reshape(-1, 2)
             key = (n0, np.round(Y, 12).tobytes())
             fit = cache.get(key)
             if fit is None:
@@ -195,35 +198,39 @@ def fit_local_functions(topo, charts, corners2d: np.ndarray, degree: int = 2,
             cond = fit[0]
             if (len(Y) >= min_data and cond <= max_condition) or layers >= max_layers:
                 break
+            if ys is None:
+                ys = list(Y)
+                placed = {f: (zall[c, :sizes[f]], tref_all[c]) for f, c in placed.items()}
             # one more layer of faces across the outer edges of the placed faces
             new_frontier = []
             for f in frontier:
                 z, tref = placed[f]
-                for k, q in enumerate(range(off[f], off[f + 1])):
-                    t = twin[q]
+                for k, q in enumerate(range(off_l[f], off_l[f + 1])):
+                    t = twin_l[q]
                     if t < 0:
                         continue
-                    g = corner_face[t]
+                    g = cf_l[t]
                     if g in placed:
                         continue
                     # corner t of g sits at vertex of next(q), next(t) at vertex of q
                     za = z[(k + 1) % len(z)]
                     zb = z[k]
-                    gs = np.arange(off[g], off[g + 1])
-                    nt = off[g] + (t - off[g] + 1) % len(gs)
+                    gs = np.arange(off_l[g], off_l[g + 1])
+                    nt = off_l[g] + (t - off_l[g] + 1) % len(gs)
                     rot = (zb - za) / (zc[nt] - zc[t])
                     rot /= abs(rot)
                     zg = za + (zc[gs] - zc[t]) * rot
                     placed[g] = (zg, tref)
                     new_frontier.append(g)
                     yy = _to_chart(zg, tref, s)
-                    for i, qv in enumerate(fv[gs]):
+                    for i, qv in enumerate(face_v[g]):
                         if qv not in seen:
                             seen.add(qv)
                             ids.append(qv)
                             ys.append(yy[i])
             layers += 1
             frontier = new_frontier
+            Y = np.array(ys).reshape(-1, 2)
             if not new_frontier:
                 break
         cond, A, A0 = fit

@@ -228,19 +228,22 @@ class BlendingSurface:
                             + np.einsum("...mi,...ijk->...mjk", mm[1], yy[2]))
         return u, Psi, mono, psi[0].max(axis=0)
 
-    def _corner_terms_shared(self, n, faces, xt):
+    def _corner_terms_shared(self, n, faces, xt, memo=None):
         """:meth:`_corner_terms` (nu = 0) when every face of the block has the same
         reference polygon and samples xt (P, 2) (mode "regular", lattice template).
 
         Then r and the in-face angle depend only on the corner slot, psi only on
         (slot, envelope, sector start) and the monomials only on (slot, angle scale,
         sector start): each distinct combination is evaluated once and gathered.
+        memo: optional dict shared by the blocks of one stencil (same lattice), so
+        combinations recurring in later blocks of a face size are not re-evaluated.
         """
         ch = self.charts
         off = self.topology.face_offsets
         corners = off[faces][None, :] + np.arange(n)[:, None]  # (n, F)
         F, P = len(faces), len(xt)
         M = self.fits.coef.shape[1]
+        memo = {} if memo is None else memo
         psi = np.empty((n, F, P))
         mono = np.empty((n, F, P, M))
         for k in range(n):
@@ -250,17 +253,31 @@ class BlendingSurface:
             shift = np.round(ch.theta0[ck] - self._env_offset[ck], 11)
             key = np.stack([self._corner_env[ck], shift], 1)
             _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-            rep = ck[first]
-            uu = eval_envelopes(self._envelopes, self._corner_env, self._env_offset, rep,
-                                ch.theta0[rep][:, None] + a[None, :], 0)[0]
-            psi[k] = (1.0 - self.kernel.cdf_derivs(r[None, :] * uu, 0)[0])[inv.ravel()]
+            rep = ck[first]  # tags: the exact inputs of the evaluation below
+            tags = [("psi", n, P, k) + t for t in zip(self._corner_env[rep].tolist(),
+                                                      ch.theta0[rep].tolist(),
+                                                      self._env_offset[rep].tolist())]
+            new = [i for i, t in enumerate(tags) if t not in memo]
+            if new:
+                rep = rep[new]
+                uu = eval_envelopes(self._envelopes, self._corner_env, self._env_offset, rep,
+                                    ch.theta0[rep][:, None] + a[None, :], 0)[0]
+                vals = 1.0 - self.kernel.cdf_derivs(r[None, :] * uu, 0)[0]
+                memo.update(zip([tags[i] for i in new], vals))
+            psi[k] = np.stack([memo[t] for t in tags])[inv.ravel()]
             if M:
                 s = ch.scale[ch.corner_vertex[ck]]
                 key = np.stack([np.round(s, 12), np.round(ch.theta0[ck], 11)], 1)
                 _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-                phi = s[first][:, None] * (ch.theta0[ck[first]][:, None] + a[None, :])
-                y = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
-                mono[k] = monomials(y, self.degree, 0)[0][inv.ravel()]
+                tags = [("mono", n, P, k) + t for t in zip(s[first].tolist(),
+                                                           ch.theta0[ck[first]].tolist())]
+                new = [i for i, t in enumerate(tags) if t not in memo]
+                if new:
+                    fn = first[new]
+                    phi = s[fn][:, None] * (ch.theta0[ck[fn]][:, None] + a[None, :])
+                    y = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
+                    memo.update(zip([tags[i] for i in new], monomials(y, self.degree, 0)[0]))
+                mono[k] = np.stack([memo[t] for t in tags])[inv.ravel()]
         S0 = psi.sum(axis=0)
         return self.topology.face_vertices[corners], [psi / S0], [mono], psi.max(axis=0)
 
@@ -506,7 +523,8 @@ class BlendingSurface:
         eps = np.inf
         ids, coef = self.fits.ids, self.fits.coef
         if self.mode == "regular":  # identical reference polygons: shared template
-            groups = ((n, f, sel, xt, self._corner_terms_shared(n, f, xt))
+            memo = {}
+            groups = ((n, f, sel, xt, self._corner_terms_shared(n, f, xt, memo))
                       for n, f, sel, xt in self._template_blocks(lat))
         else:
             x = lat.map_to_polygon(self.shapes.corners)
