@@ -41,12 +41,14 @@ _LAZY = {
     "StarGauge": "gauge",
     # scattered points in R^n (DESIGN sections 3-4)
     "GERBSInterpolator": "hermite",
+    "cover_report": "diagnostics",
     # polygon-mesh blending surfaces (DESIGN section 5)
     "MeshTopology": "mesh_topology",
     "validate_geometry": "mesh_topology",
     "Lattice": "tessellation",
     "output_counts": "tessellation",
     "BlendingSurface": "mesh_surface",
+    "Stencil": "stencil",
 }
 
 __all__ = sorted(
