@@ -1,6 +1,8 @@
 """Knots and local functions of the smooth radial envelope (DESIGN section 4).
 
-Two certified constructions of rho~ = 1/u~, u~ = sum_j G_j u_j with local
+``build_blend`` (the default, see its docstring and :func:`blend_check`): the
+edge lines pulled in by c in [kappa, 1], one wide GERBS transition per corner.
+Two older certified constructions (fallbacks) of rho~ = 1/u~, u~ = sum_j G_j u_j with local
 functions u_j(theta) = a_j cos(theta - m_j) + b_j (a straight line: b = 0,
 a = 1/q; a constant radius c: a = 0, b = 1/c):
 
@@ -275,3 +277,177 @@ def _corner_lines(C, c, tA, tB, nA, pA, nB, pB, tau, L, tc, roomA, roomB):
     if not np.all(q > 0):
         return None, None, None
     return ang, m, q
+
+
+# ----------------------------------------------------------------- line blends
+# Convex corner: the blend of two lines bulges outwards, so the lines are pulled in
+# by c < 1 (allowance 1 - c); reflex corner: it bulges inwards (allowance
+# c / kappa - 1). Per edge line one c, from the types of its two corners.
+_BLEND_SAMPLES = 24       # certification sub-intervals per side of a transition
+_BLEND_SHRINK = 0.85      # factor applied to a failing side's width
+_BLEND_ITERS = 90
+
+
+CONVEX_SCALE = 0.9        # c of a line whose corners are convex (clipped to >= kappa)
+
+
+def blend_scales(convex_start, convex_end, kappa):
+    """Scale c of an edge line from the types of its end corners (True convex,
+    False reflex, None straight/open): c = max(kappa, CONVEX_SCALE) at convex-only
+    ends, 1 at reflex-only ends, halfway between for one of each."""
+    cvx = np.asarray(convex_start, dtype=object), np.asarray(convex_end, dtype=object)
+    has_c = (cvx[0] == True) | (cvx[1] == True)          # noqa: E712 (object arrays)
+    has_r = (cvx[0] == False) | (cvx[1] == False)        # noqa: E712
+    cc = max(kappa, CONVEX_SCALE)
+    return np.where(has_c & has_r, 0.5 * (1.0 + cc), np.where(has_c, cc, 1.0)).astype(float)
+
+
+def blend_check(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMPLES):
+    """Certify the corner transitions u~ = (1 - F(w)) uA / cA + F(w) uB / cB.
+
+    Angles relative to the corner ray (at 0); line X: uX = cos(x - nX) / pX; the
+    transition runs over [-a, b] (w = (x + a) / (a + b)), the exact radius is
+    line A for x < 0 and line B for x > 0. Arrays (n,). Rigorous: on each of
+    ``samples`` sub-intervals per side F lies between its end values (F is
+    increasing) and the ratio of the two lines is monotone, and the normalised
+    blend R = u~ / u_exact is bilinear in (F, ratio): its extremes over the
+    sub-interval are among the four corner values. Returns (okA, okB, Rmin, Rmax)
+    with ok: kappa * rho <= rho~ <= rho (1 <= R <= 1/kappa) on that side.
+    """
+    i = np.arange(samples + 1) / samples
+    s = a + b
+    out = []
+    for side in (0, 1):
+        if side == 0:
+            x = -a[:, None] * (1.0 - i)                   # -a .. 0
+        else:
+            x = b[:, None] * i                            # 0 .. b
+        w = np.clip((x + a[:, None]) / s[:, None], 0.0, 1.0)
+        F = kernel.cdf_derivs(w.ravel(), 0)[0].reshape(w.shape)
+        uA = np.cos(x - nA[:, None]) / pA[:, None]
+        uB = np.cos(x - nB[:, None]) / pB[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if side == 0:   # R = (1 - F) / cA + F r / cB, r = uB / uA
+                r = uB / uA
+                k0, k1 = 1.0 / cA[:, None], 1.0 / cB[:, None]
+            else:           # R = (1 - F) r / cA + F / cB, r = uA / uB
+                r = uA / uB
+                k0, k1 = 1.0 / cB[:, None], 1.0 / cA[:, None]
+        Fs = (1.0 - F) if side == 0 else F        # weight of the own line
+        # on sub-interval j: own weight in [Fs_j, Fs_j+1], r in [r_j, r_j+1] (monotone)
+        vals = []
+        for Fw in (Fs[:, :-1], Fs[:, 1:]):
+            for rr in (r[:, :-1], r[:, 1:]):
+                vals.append(Fw * k0 + (1.0 - Fw) * rr * k1)
+        V = np.stack(vals)
+        V = np.where(np.isfinite(V), V, np.nan)
+        lo = np.min(V, axis=(0, 2))
+        hi = np.max(V, axis=(0, 2))
+        ok = (lo >= 1.0 - 1e-12) & (hi <= (1.0 + 1e-12) / kappa)
+        out.append((ok & np.isfinite(lo) & np.isfinite(hi), lo, hi))
+    (okA, loA, hiA), (okB, loB, hiB) = out
+    return okA, okB, np.fmin(loA, loB), np.fmax(hiA, hiB)
+
+
+def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel):
+    """Shrink the transition widths a (into A) and b (into B) of every corner until
+    :func:`blend_check` certifies it (the failing side by _BLEND_SHRINK per pass).
+    Returns (a, b, ok, Rmin, Rmax)."""
+    a, b = a.astype(float).copy(), b.astype(float).copy()
+    todo = np.arange(len(a))
+    ok = np.zeros(len(a), bool)
+    Rmin, Rmax = np.full(len(a), np.nan), np.full(len(a), np.nan)
+    for _ in range(_BLEND_ITERS):
+        if not todo.size:
+            break
+        t = todo
+        okA, okB, lo, hi = blend_check(nA[t], pA[t], cA[t], nB[t], pB[t], cB[t], a[t], b[t],
+                                       kappa, kernel)
+        good = okA & okB
+        ok[t[good]] = True
+        Rmin[t], Rmax[t] = lo, hi
+        a[t[~okA]] *= _BLEND_SHRINK
+        b[t[~okB]] *= _BLEND_SHRINK
+        todo = t[~good]
+    return a, b, ok, Rmin, Rmax
+
+
+def build_blend(theta, normal, dist, closed, span, kappa, kernel):
+    """Edge lines (pulled in by c_k) blended directly across each corner.
+
+    Consecutive collinear edges are merged; every remaining corner gets ONE GERBS
+    transition between its two lines, as wide as the certified bound allows
+    (initially half of each adjacent edge's angle, the whole edge at an open
+    end), shrunk by :func:`fit_blend_widths`. Returns (knots, m, a, b, Rmin,
+    Rmax) (R = u~ / u_exact over everything: rho~/rho in [1/Rmax, 1/Rmin]) or
+    None if some corner cannot be certified.
+    """
+    K = len(dist)
+    n, p = np.asarray(normal, float), np.asarray(dist, float)
+    # corners between piece k-1 and k (closed: all k, piece -1 = K-1 one period back)
+    ks = np.arange(K) if closed else np.arange(1, K)
+    prev = (ks - 1) % K
+    nprev = n[prev] - np.where(ks == 0, span, 0.0)
+    tau = n[ks] - nprev
+    straight = (np.abs(tau) <= 1e-10) & (np.abs(p[ks] - p[prev]) <= 1e-10 * p[ks])
+    real = ks[~straight]
+    if closed and real.size == 0:
+        return None
+    # super-pieces: runs of pieces between real corners, one line each
+    if closed:
+        starts = real
+        ends = np.append(real[1:], real[0] + K)          # piece index of the next corner
+    else:
+        starts = np.concatenate([[0], real])
+        ends = np.concatenate([real, [K]])
+    th_ext = np.concatenate([theta[:-1], theta[:-1] + span, [theta[-1] + span]]) if closed \
+        else theta
+    t0 = th_ext[starts]
+    t1 = th_ext[ends]
+    sn = n[starts % K] + np.where(starts >= K, span, 0.0)
+    sp = p[starts % K]
+    P = len(starts)
+    # corner j sits at the start of super-piece j (closed: all; open: j >= 1)
+    cj = np.arange(P) if closed else np.arange(1, P)
+    pj = (cj - 1) % P
+    ctheta = t0[cj]
+    nA = sn[pj] - np.where(cj == 0, span, 0.0) - ctheta if closed else sn[pj] - ctheta
+    nB = sn[cj] - ctheta
+    convex = (nB - nA) > 0
+    cstart = np.full(P, None, dtype=object)
+    cend = np.full(P, None, dtype=object)
+    cstart[cj] = convex
+    cend[pj] = convex
+    c = blend_scales(cstart, cend, kappa)
+    width = t1 - t0
+    # room: half an edge between two corners, the whole edge next to an open end
+    roomA = np.where(cstart[pj] == None, 1.0, 0.5) * width[pj]    # noqa: E711
+    roomB = np.where(cend[cj] == None, 1.0, 0.5) * width[cj]      # noqa: E711
+    if not closed:
+        roomA = np.where(pj == 0, width[pj], roomA)
+        roomB = np.where(cj == P - 1, width[cj], roomB)
+    wa, wb, ok, Rmin, Rmax = fit_blend_widths(nA, sp[pj], c[pj], nB, sp[cj], c[cj],
+                                              roomA, roomB, kappa, kernel)
+    if not ok.all():
+        return None
+    # pure stretch of super-piece k: [t0 + b(corner at its start), t1 - a(corner at its end)]
+    bs = np.zeros(P)
+    ae = np.zeros(P)
+    bs[cj] = wb
+    ae[pj] = wa
+    lo, hi = t0 + bs, t1 - ae
+    kn = np.stack([lo, hi], axis=1).ravel()
+    mm = np.repeat(sn, 2)
+    cc = np.repeat(c * sp, 2)
+    if closed:
+        kn = np.append(kn, lo[0] + span)
+        mm = np.append(mm, sn[0] + span)
+        cc = np.append(cc, c[0] * sp[0])
+    # a pure stretch of zero length is one knot
+    keep = np.concatenate([[True], np.diff(kn) > 1e-12 * max(span, 1e-300)])
+    kn, mm, cc = kn[keep], mm[keep], cc[keep]
+    if np.any(np.diff(kn) <= 0):
+        return None
+    pure = (1.0 / c).min(), (1.0 / c).max()
+    return (kn, mm, 1.0 / cc, np.zeros_like(cc), float(min(Rmin.min(initial=np.inf), pure[0])),
+            float(max(Rmax.max(initial=-np.inf), pure[1])))
