@@ -376,3 +376,23 @@ def test_open_sector_with_chart_scale_straighten_rule():
     with pytest.raises(InvalidParameterError) as err:     # chart span must stay < 2*pi
         StarGauge(env, scale=3.0)
     assert err.value.name == "scale"
+
+
+def test_open_envelope_wider_than_2pi_endpoints_and_curvature():
+    """A boundary fan of a regular mesh can unfold to more than 2*pi (its chart
+    compresses the angle): one open envelope serves it, certified; its knot
+    intervals are all non-empty (finite values up to theta_K itself) and
+    curvature_stats terminates with finite numbers."""
+    theta = np.linspace(0.0, 7.0, 8)
+    radius = np.array([1.0, 0.9, 1.2, 1.0, 0.8, 1.1, 1.0, 0.9])
+    env = RadialEnvelope(theta, radius, closed=False)
+    assert env.span > 2 * np.pi and np.all(np.diff(env.knots) > 0)
+    th = dense_theta(env, 50_000)
+    ratio = env(th) / env.exact_radius(th)
+    assert ratio.min() >= KAPPA * SHRINK * (1 - 1e-12) and ratio.max() <= SHRINK * (1 + 1e-12)
+    ends = env.derivs(np.array([theta[0], theta[-1]]), 2)
+    assert np.all(np.isfinite(ends))
+    st = env.curvature_stats()
+    assert all(np.isfinite(v) for v in st.values())
+    G = StarGauge(env, scale=1.5 * np.pi / env.span)        # the "keep" rule's compression
+    assert np.isfinite(G.g(np.array([0.3, 0.1])))
