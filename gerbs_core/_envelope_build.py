@@ -349,7 +349,8 @@ def blend_check(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMP
     return okA, okB, np.fmin(loA, loB), np.fmax(hiA, hiB)
 
 
-def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel):
+def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMPLES,
+                     factor=_BLEND_SHRINK):
     """Shrink the transition widths a (into A) and b (into B) of every corner until
     :func:`blend_check` certifies it (the failing side by _BLEND_SHRINK per pass).
     Returns (a, b, ok, Rmin, Rmax)."""
@@ -362,12 +363,12 @@ def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel):
             break
         t = todo
         okA, okB, lo, hi = blend_check(nA[t], pA[t], cA[t], nB[t], pB[t], cB[t], a[t], b[t],
-                                       kappa, kernel)
+                                       kappa, kernel, samples)
         good = okA & okB
         ok[t[good]] = True
         Rmin[t], Rmax[t] = lo, hi
-        a[t[~okA]] *= _BLEND_SHRINK
-        b[t[~okB]] *= _BLEND_SHRINK
+        a[t[~okA]] *= factor
+        b[t[~okB]] *= factor
         todo = t[~good]
     return a, b, ok, Rmin, Rmax
 
