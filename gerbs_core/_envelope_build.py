@@ -302,7 +302,8 @@ def blend_scales(convex_start, convex_end, kappa):
     return np.where(has_c & has_r, 0.5 * (1.0 + cc), np.where(has_c, cc, 1.0)).astype(float)
 
 
-def blend_check(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMPLES):
+def blend_check(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMPLES,
+                chunk=1024):
     """Certify the corner transitions u~ = (1 - F(w)) uA / cA + F(w) uB / cB.
 
     Angles relative to the corner ray (at 0); line X: uX = cos(x - nX) / pX; the
@@ -313,39 +314,51 @@ def blend_check(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMP
     blend R = u~ / u_exact is bilinear in (F, ratio): its extremes over the
     sub-interval are among the four corner values. Returns (okA, okB, Rmin, Rmax)
     with ok: kappa * rho <= rho~ <= rho (1 <= R <= 1/kappa) on that side.
+    Works in chunks of ``chunk`` corners (the temporaries then stay in cache).
     """
-    i = np.arange(samples + 1) / samples
-    s = a + b
-    out = []
-    for side in (0, 1):
-        if side == 0:
-            x = -a[:, None] * (1.0 - i)                   # -a .. 0
-        else:
-            x = b[:, None] * i                            # 0 .. b
-        w = np.clip((x + a[:, None]) / s[:, None], 0.0, 1.0)
-        F = kernel.cdf_derivs(w.ravel(), 0)[0].reshape(w.shape)
-        uA = np.cos(x - nA[:, None]) / pA[:, None]
-        uB = np.cos(x - nB[:, None]) / pB[:, None]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            if side == 0:   # R = (1 - F) / cA + F r / cB, r = uB / uA
-                r = uB / uA
-                k0, k1 = 1.0 / cA[:, None], 1.0 / cB[:, None]
-            else:           # R = (1 - F) r / cA + F / cB, r = uA / uB
-                r = uA / uB
-                k0, k1 = 1.0 / cB[:, None], 1.0 / cA[:, None]
-        Fs = (1.0 - F) if side == 0 else F        # weight of the own line
-        # on sub-interval j: own weight in [Fs_j, Fs_j+1], r in [r_j, r_j+1] (monotone)
-        vals = []
-        for Fw in (Fs[:, :-1], Fs[:, 1:]):
-            for rr in (r[:, :-1], r[:, 1:]):
-                vals.append(Fw * k0 + (1.0 - Fw) * rr * k1)
-        V = np.stack(vals)
-        V = np.where(np.isfinite(V), V, np.nan)
-        lo = np.min(V, axis=(0, 2))
-        hi = np.max(V, axis=(0, 2))
-        ok = (lo >= 1.0 - 1e-12) & (hi <= (1.0 + 1e-12) / kappa)
-        out.append((ok & np.isfinite(lo) & np.isfinite(hi), lo, hi))
-    (okA, loA, hiA), (okB, loB, hiB) = out
+    if len(a) > chunk:
+        parts = [blend_check(nA[k:k + chunk], pA[k:k + chunk], cA[k:k + chunk],
+                             nB[k:k + chunk], pB[k:k + chunk], cB[k:k + chunk],
+                             a[k:k + chunk], b[k:k + chunk], kappa, kernel, samples, chunk)
+                 for k in range(0, len(a), chunk)]
+        return tuple(np.concatenate(z) for z in zip(*parts))
+    m = samples
+    i = np.arange(m + 1) / m
+    # x from -a to b: left half -a (1 - i), right half b i (the corner shared)
+    x = np.concatenate([-a[:, None] * (1.0 - i), b[:, None] * i[1:]], axis=1)
+    w = np.clip((x + a[:, None]) / (a + b)[:, None], 0.0, 1.0)
+    F = kernel.cdf_derivs(w.ravel(), 0)[0].reshape(w.shape)
+    uA = np.cos(x - nA[:, None]) * (1.0 / pA)[:, None]
+    uB = np.cos(x - nB[:, None]) * (1.0 / pB)[:, None]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        # side A: R = (1 - F) kA + F (uB/uA) kB; side B: R = F kB + (1 - F) (uA/uB) kA
+        own = np.concatenate([1.0 - F[:, :m + 1], F[:, m:]], axis=1)
+        r = np.concatenate([uB[:, :m + 1] / uA[:, :m + 1], uA[:, m:] / uB[:, m:]], axis=1)
+    kA, kB = (1.0 / cA)[:, None], (1.0 / cB)[:, None]
+    k0 = np.concatenate([np.broadcast_to(kA, (len(a), m + 1)),
+                         np.broadcast_to(kB, (len(a), m + 1))], axis=1)
+    k1 = np.concatenate([np.broadcast_to(kB, (len(a), m + 1)),
+                         np.broadcast_to(kA, (len(a), m + 1))], axis=1)
+    # sub-intervals: j = 0..m-1 (side A), m+1..2m (side B); on each the own weight lies
+    # between its end values, r between its end values (monotone), R bilinear
+    lo = hi = None
+    with np.errstate(invalid="ignore", over="ignore"):
+        for Fw in (own[:, :-1], own[:, 1:]):
+            for rr, kk0, kk1 in ((r[:, :-1], k0[:, :-1], k1[:, :-1]),
+                                 (r[:, 1:], k0[:, 1:], k1[:, 1:])):
+                v = Fw * kk0 + (1.0 - Fw) * rr * kk1
+                lo = v if lo is None else np.fmin(lo, v)
+                hi = v if hi is None else np.fmax(hi, v)
+    bad = ~(np.isfinite(r[:, :-1]) & np.isfinite(r[:, 1:]))
+    # drop the pseudo sub-interval m (it straddles the corner: side A's last point
+    # with side B's first point, both at x = 0, mixed formulas)
+    lo = np.where(bad, -np.inf, lo)
+    hi = np.where(bad, np.inf, hi)
+    loA, hiA = lo[:, :m].min(axis=1), hi[:, :m].max(axis=1)
+    loB, hiB = lo[:, m + 1:].min(axis=1), hi[:, m + 1:].max(axis=1)
+    top = (1.0 + 1e-12) / kappa
+    okA = (loA >= 1.0 - 1e-12) & (hiA <= top)
+    okB = (loB >= 1.0 - 1e-12) & (hiB <= top)
     return okA, okB, np.fmin(loA, loB), np.fmax(hiA, hiB)
 
 

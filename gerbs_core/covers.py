@@ -153,9 +153,9 @@ class PlanarStarCover:
         self.c = blend_scales(cstart, cend, self.kappa)
         roomA = self.delta[e] * np.where(self.prev_edge[e] >= 0, 0.5, 1.0)
         roomB = self.delta[f] * np.where(self.next_edge[f] >= 0, 0.5, 1.0)
-        # coarser than the mesh envelopes (12 sub-intervals, factor 0.7): N can be 1e5+
+        # coarser than the mesh envelopes (8 sub-intervals, factor 0.7): N can be 1e5+
         wa, wb, ok, _, _ = fit_blend_widths(nA, self.p[e], self.c[e], nB, self.p[f], self.c[f],
-                                            roomA, roomB, self.kappa, self.kernel, 12, 0.7)
+                                            roomA, roomB, self.kappa, self.kernel, 8, 0.7)
         if not ok.all():
             raise InvalidPointSetError(
                 "no certified smooth gauge at a corner of these stars (degenerate polygon); "
