@@ -286,6 +286,7 @@ def _corner_lines(C, c, tA, tB, nA, pA, nB, pB, tau, L, tc, roomA, roomB):
 _BLEND_SAMPLES = 24       # certification sub-intervals per side of a transition
 _BLEND_SHRINK = 0.85      # factor applied to a failing side's width
 _BLEND_ITERS = 90
+_BLEND_WIDEN = 2.0        # the sampled search starts at this multiple of the closed form
 
 
 CONVEX_SCALE = 0.9        # c of a line whose corners are convex (clipped to >= kappa)
@@ -362,15 +363,58 @@ def blend_check(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMP
     return okA, okB, np.fmin(loA, loB), np.fmax(hiA, hiB)
 
 
+def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor, iters=200):
+    """Widths from the closed-form bound of :func:`analytic_blend_widths`, each
+    side shrunk independently by ``factor`` while its own condition fails (no
+    sampling: O(1) per corner and pass). Returns (a, b, ok)."""
+    tau = np.abs(nB - nA)
+    cmax, cmin = np.maximum(cA, cB), np.minimum(cA, cB)
+    convex = (nB - nA) > 0
+    allowA = np.where(convex, cB * (1.0 / cmax - 1.0), cB * (1.0 / kappa - 1.0 / cmin))
+    allowB = np.where(convex, cA * (1.0 / cmax - 1.0), cA * (1.0 / kappa - 1.0 / cmin))
+    G = overshoot_profile(kernel)
+    n = len(G) - 1
+    st = np.sin(tau)
+    same = (tau <= 1e-15) & (np.abs(pA - pB) <= 1e-15 * pA)
+    a, b = roomA.astype(float).copy(), roomB.astype(float).copy()
+    ok = same.copy()
+    t = np.flatnonzero(~same)
+    for _ in range(iters):
+        if not t.size:
+            break
+        W = a[t] + b[t]
+        al = a[t] / W
+        gA = G[np.clip(np.ceil(al * n).astype(int), 0, n)]
+        gB = G[np.clip(np.ceil((1.0 - al) * n).astype(int), 0, n)]
+        eA = np.minimum(np.cos(-a[t] - nA[t]) ** 2, np.cos(nA[t]) ** 2)
+        eB = np.minimum(np.cos(b[t] - nB[t]) ** 2, np.cos(nB[t]) ** 2)
+        okA = W * (pA[t] / pB[t]) * st[t] * gA <= allowA[t] * eA * (1 - 1e-9)
+        okB = W * (pB[t] / pA[t]) * st[t] * gB <= allowB[t] * eB * (1 - 1e-9)
+        good = okA & okB
+        ok[t[good]] = True
+        a[t[~okA]] *= factor
+        b[t[~okB]] *= factor
+        t = t[~good]
+    return a, b, ok
+
+
 def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMPLES,
-                     factor=_BLEND_SHRINK):
-    """Shrink the transition widths a (into A) and b (into B) of every corner until
-    :func:`blend_check` certifies it (the failing side by _BLEND_SHRINK per pass).
-    Returns (a, b, ok, Rmin, Rmax)."""
-    a, b = a.astype(float).copy(), b.astype(float).copy()
-    todo = np.arange(len(a))
-    ok = np.zeros(len(a), bool)
-    Rmin, Rmax = np.full(len(a), np.nan), np.full(len(a), np.nan)
+                     factor=_BLEND_SHRINK, widen=_BLEND_WIDEN):
+    """Certified transition widths a (into A) and b (into B), at most the rooms.
+
+    1. :func:`closed_form_fit` (rigorous bound, O(1) per corner and pass);
+    2. where it left room, the sampled :func:`blend_check` (rigorous too, tighter
+       away from nearly radial edges) from ``widen`` times those widths (at most
+       the room), the failing side shrunk by ``factor`` per pass; kept where it
+       certifies wider transitions (larger min(a / a_cf, b / b_cf) >= 1).
+    Returns (a, b, ok, Rmin, Rmax), R = u~ / u_exact certified in [Rmin, Rmax]
+    ([1, 1/kappa] for the closed-form corners).
+    """
+    a0, b0 = np.asarray(a, float), np.asarray(b, float)
+    fa, fb, ok = closed_form_fit(nA, pA, cA, nB, pB, cB, a0, b0, kappa, kernel, factor)
+    Rmin, Rmax = np.ones(len(a0)), np.full(len(a0), 1.0 / kappa)
+    a, b = np.minimum(a0, fa * widen), np.minimum(b0, fb * widen)
+    todo = np.flatnonzero((a > fa) | (b > fb))
     for _ in range(_BLEND_ITERS):
         if not todo.size:
             break
@@ -378,12 +422,90 @@ def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND
         okA, okB, lo, hi = blend_check(nA[t], pA[t], cA[t], nB[t], pB[t], cB[t], a[t], b[t],
                                        kappa, kernel, samples)
         good = okA & okB
-        ok[t[good]] = True
-        Rmin[t], Rmax[t] = lo, hi
+        g = t[good]
+        better = np.minimum(a[g] / fa[g], b[g] / fb[g]) >= 1.0
+        g = g[better]
+        fa[g], fb[g], ok[g] = a[g], b[g], True
+        Rmin[g], Rmax[g] = lo[good][better], hi[good][better]
         a[t[~okA]] *= factor
         b[t[~okB]] *= factor
-        todo = t[~good]
-    return a, b, ok, Rmin, Rmax
+        # stop once below the closed-form answer on either side
+        todo = t[~good & (a[t] >= fa[t]) & (b[t] >= fb[t])]
+    return fa, fb, ok, Rmin, Rmax
+
+
+def analytic_blend_widths(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, steps=30):
+    """Certified transition widths from a closed-form bound (no sampling).
+
+    On side A (x in [-a, 0], corner ray at 0) the exact radius is line A and
+    R = u~/u_A = (1 - F)/cA + F r/cB with r = uB/uA. r(0) = 1 and
+    |r'(x)| = (pA/pB) |sin(nB - nA)| / cos^2(x - nA) <= D_A(a) (the max of
+    1/cos^2 over [-a, 0] is at an end), so |r - 1| <= D_A |x| and R stays in
+    [1, 1/kappa] if F(w) D_A |x| <= allowance_A: convex corner (r <= 1)
+    cB (1/max(c) - 1), reflex (r >= 1) cB (1/kappa - 1/min(c)). With the corner
+    at alpha = a / (a + b) and width W = a + b, F(w) |x| <= W G(alpha), so
+    W D_A(a) G(alpha) <= allowance_A suffices; likewise on side B with G(1 - alpha).
+    The rooms are scaled by the largest s in [0, 1] meeting both (the condition
+    is monotone in s: bisection, ``steps`` halvings, the certified end kept).
+    Returns (a, b).
+    """
+    tau = np.abs(nB - nA)
+    cmax, cmin = np.maximum(cA, cB), np.minimum(cA, cB)
+    convex = (nB - nA) > 0
+    allowA = np.where(convex, cB * (1.0 / cmax - 1.0), cB * (1.0 / kappa - 1.0 / cmin))
+    allowB = np.where(convex, cA * (1.0 / cmax - 1.0), cA * (1.0 / kappa - 1.0 / cmin))
+    W = roomA + roomB
+    alpha = roomA / W
+    G = overshoot_profile(kernel)
+    n = len(G) - 1
+    gA = G[np.clip(np.ceil(alpha * n).astype(int), 0, n)]
+    gB = G[np.clip(np.ceil((1.0 - alpha) * n).astype(int), 0, n)]
+    st = np.sin(tau)
+    # need (for side A) s W (pA/pB) sin(tau) gA <= allowA cos^2(end) (1 - 1e-9)
+    kA = W * (pA / pB) * st * gA
+    kB = W * (pB / pA) * st * gB
+    cA0, cB0 = np.cos(nA) ** 2, np.cos(nB) ** 2
+
+    def holds(sc):
+        eA = np.minimum(np.cos(-sc * roomA - nA) ** 2, cA0)
+        eB = np.minimum(np.cos(sc * roomB - nB) ** 2, cB0)
+        return (sc * kA <= allowA * eA * (1 - 1e-9)) & (sc * kB <= allowB * eB * (1 - 1e-9))
+
+    lo, hi = np.zeros(len(W)), np.ones(len(W))
+    done = holds(hi)
+    lo[done] = 1.0
+    for _ in range(steps):
+        mid = 0.5 * (lo + hi)
+        h = holds(mid)
+        lo = np.where(h & ~done, mid, lo)
+        hi = np.where(h | done, hi, mid)
+    same = (tau <= 1e-15) & (np.abs(pA - pB) <= 1e-15 * pA)   # the same line: any width
+    scale = np.where(same, 1.0, lo)
+    return roomA * scale, roomB * scale
+
+
+_G_CACHE: dict = {}
+
+
+def overshoot_profile(kernel, n=513):
+    """G(alpha) on the grid alpha = k/(n-1), an upper bound of
+    max over w in [0, alpha] of F(w) (alpha - w): the worst weight times distance
+    on side A of a unit-width transition whose corner sits at w = alpha (side B:
+    G(1 - alpha), as F(1 - w) = 1 - F(w)). Between grid points
+    F(w)(alpha - w) <= F(w_hi)(alpha - w_lo) (F increasing): rigorous."""
+    # keyed by the kernel's values (not its id: ids are reused after collection)
+    w = np.linspace(0.0, 1.0, n)
+    F = kernel.cdf_derivs(w, 0)[0]
+    key = F.tobytes()
+    G = _G_CACHE.get(key)
+    if G is None:
+        Fhi = np.append(F[1:], 1.0)
+        G = np.max(np.where(w[None, :] <= w[:, None], Fhi[None, :] * (w[:, None] - w[None, :]),
+                            0.0), axis=1)
+        if len(_G_CACHE) > 16:
+            _G_CACHE.clear()
+        _G_CACHE[key] = G
+    return G
 
 
 def build_blend(theta, normal, dist, closed, span, kappa, kernel):
