@@ -364,9 +364,19 @@ def blend_check(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMP
 
 
 def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor, iters=200):
-    """Widths from the closed-form bound of :func:`analytic_blend_widths`, each
-    side shrunk independently by ``factor`` while its own condition fails (no
-    sampling: O(1) per corner and pass). Returns (a, b, ok)."""
+    """Certified transition widths from a closed-form bound (no sampling).
+
+    On side A (x in [-a, 0], corner ray at 0) the exact radius is line A and
+    R = u~/u_A = (1 - F)/cA + F r/cB with r = uB/uA. r(0) = 1 and
+    |r'(x)| = (pA/pB) |sin(nB - nA)| / cos^2(x - nA) <= D_A(a) (the max of
+    1/cos^2 over [-a, 0] is at an end), so |r - 1| <= D_A |x| and R stays in
+    [1, 1/kappa] if F(w) D_A |x| <= allowance_A: convex corner (r <= 1)
+    cB (1/max(c) - 1), reflex (r >= 1) cB (1/kappa - 1/min(c)). With the corner
+    at alpha = a / (a + b) of a transition of width W = a + b, F(w)|x| <=
+    W G(alpha) (:func:`overshoot_profile`), so W D_A(a) G(alpha) <= allowance_A
+    suffices; likewise on side B with G(1 - alpha). Each side is shrunk by
+    ``factor`` while its own condition fails (O(1) per corner and pass).
+    Returns (a, b, ok)."""
     tau = np.abs(nB - nA)
     cmax, cmin = np.maximum(cA, cB), np.minimum(cA, cB)
     convex = (nB - nA) > 0
@@ -432,56 +442,6 @@ def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND
         # stop once below the closed-form answer on either side
         todo = t[~good & (a[t] >= fa[t]) & (b[t] >= fb[t])]
     return fa, fb, ok, Rmin, Rmax
-
-
-def analytic_blend_widths(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, steps=30):
-    """Certified transition widths from a closed-form bound (no sampling).
-
-    On side A (x in [-a, 0], corner ray at 0) the exact radius is line A and
-    R = u~/u_A = (1 - F)/cA + F r/cB with r = uB/uA. r(0) = 1 and
-    |r'(x)| = (pA/pB) |sin(nB - nA)| / cos^2(x - nA) <= D_A(a) (the max of
-    1/cos^2 over [-a, 0] is at an end), so |r - 1| <= D_A |x| and R stays in
-    [1, 1/kappa] if F(w) D_A |x| <= allowance_A: convex corner (r <= 1)
-    cB (1/max(c) - 1), reflex (r >= 1) cB (1/kappa - 1/min(c)). With the corner
-    at alpha = a / (a + b) and width W = a + b, F(w) |x| <= W G(alpha), so
-    W D_A(a) G(alpha) <= allowance_A suffices; likewise on side B with G(1 - alpha).
-    The rooms are scaled by the largest s in [0, 1] meeting both (the condition
-    is monotone in s: bisection, ``steps`` halvings, the certified end kept).
-    Returns (a, b).
-    """
-    tau = np.abs(nB - nA)
-    cmax, cmin = np.maximum(cA, cB), np.minimum(cA, cB)
-    convex = (nB - nA) > 0
-    allowA = np.where(convex, cB * (1.0 / cmax - 1.0), cB * (1.0 / kappa - 1.0 / cmin))
-    allowB = np.where(convex, cA * (1.0 / cmax - 1.0), cA * (1.0 / kappa - 1.0 / cmin))
-    W = roomA + roomB
-    alpha = roomA / W
-    G = overshoot_profile(kernel)
-    n = len(G) - 1
-    gA = G[np.clip(np.ceil(alpha * n).astype(int), 0, n)]
-    gB = G[np.clip(np.ceil((1.0 - alpha) * n).astype(int), 0, n)]
-    st = np.sin(tau)
-    # need (for side A) s W (pA/pB) sin(tau) gA <= allowA cos^2(end) (1 - 1e-9)
-    kA = W * (pA / pB) * st * gA
-    kB = W * (pB / pA) * st * gB
-    cA0, cB0 = np.cos(nA) ** 2, np.cos(nB) ** 2
-
-    def holds(sc):
-        eA = np.minimum(np.cos(-sc * roomA - nA) ** 2, cA0)
-        eB = np.minimum(np.cos(sc * roomB - nB) ** 2, cB0)
-        return (sc * kA <= allowA * eA * (1 - 1e-9)) & (sc * kB <= allowB * eB * (1 - 1e-9))
-
-    lo, hi = np.zeros(len(W)), np.ones(len(W))
-    done = holds(hi)
-    lo[done] = 1.0
-    for _ in range(steps):
-        mid = 0.5 * (lo + hi)
-        h = holds(mid)
-        lo = np.where(h & ~done, mid, lo)
-        hi = np.where(h | done, hi, mid)
-    same = (tau <= 1e-15) & (np.abs(pA - pB) <= 1e-15 * pA)   # the same line: any width
-    scale = np.where(same, 1.0, lo)
-    return roomA * scale, roomB * scale
 
 
 _G_CACHE: dict = {}

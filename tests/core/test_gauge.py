@@ -396,3 +396,49 @@ def test_open_envelope_wider_than_2pi_endpoints_and_curvature():
     assert all(np.isfinite(v) for v in st.values())
     G = StarGauge(env, scale=1.5 * np.pi / env.span)        # the "keep" rule's compression
     assert np.isfinite(G.g(np.array([0.3, 0.1])))
+
+
+def test_transition_width_certificates_hold_densely():
+    """The two certificates of a corner transition (the closed-form bound of
+    closed_form_fit and the sampled bilinear bound of blend_check) both imply
+    1 <= u~/u_exact <= 1/kappa (kappa rho <= rho~ <= rho): checked on 4001
+    points per transition for random corners, nearly radial edges included."""
+    from gerbs_core._envelope_build import blend_check, closed_form_fit, fit_blend_widths
+    rng = np.random.default_rng(4)
+    n = 400
+    nA = rng.uniform(-1.55, 1.2, n)
+    nB = nA + rng.choice([-1, 1], n) * rng.uniform(0.01, 2.0, n)
+    nB = np.clip(nB, -1.55, 1.55)
+    pA = rng.uniform(0.2, 1.0, n)
+    pB = pA * np.cos(nB) / np.cos(nA)          # the two edges meet on the corner ray
+    # pulled-in lines as blend_scales chooses them: c < 1 beside a convex corner
+    # (room for the outward bulge), c > kappa beside a reflex one
+    convex = nB > nA
+    cA = np.where(convex, rng.choice([0.8, 0.9, 0.95], n), rng.choice([0.9, 0.95, 1.0], n))
+    cB = np.where(convex, rng.choice([0.8, 0.9, 0.95], n), rng.choice([0.9, 0.95, 1.0], n))
+    # rooms inside each line's own range (cos(x - n) > 0)
+    roomA = np.minimum(rng.uniform(0.05, 1.0, n), 0.99 * (np.pi / 2 - nA))
+    roomB = np.minimum(rng.uniform(0.05, 1.0, n), 0.99 * (np.pi / 2 + nB))
+    kern = ERBS()
+    cf = closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, KAPPA, kern, 0.85)
+    fit = fit_blend_widths(nA, pA, cA, nB, pB, cB, roomA, roomB, KAPPA, kern)
+    assert cf[2].all() and fit[2].all()
+    def dense_R(a, b):
+        x = -a[:, None] + (a + b)[:, None] * np.linspace(0, 1, 4001)[None]
+        F = kern.cdf_derivs(((x + a[:, None]) / (a + b)[:, None]).ravel(), 0)[0].reshape(x.shape)
+        uA = np.cos(x - nA[:, None]) / pA[:, None]
+        uB = np.cos(x - nB[:, None]) / pB[:, None]
+        u = (1 - F) * uA / cA[:, None] + F * uB / cB[:, None]
+        return u / np.where(x < 0, uA, uB)
+
+    for a, b in ((cf[0], cf[1]), (fit[0], fit[1])):
+        assert np.all(a <= roomA) and np.all(b <= roomB) and np.all(a + b > 0)
+        R = dense_R(a, b)
+        assert R.min() >= 1 - 1e-12 and R.max() <= (1 + 1e-12) / KAPPA
+    # the full rooms are NOT all admissible (so the check above can fail)
+    R = dense_R(roomA, roomB)
+    assert R.min() < 1 - 1e-3 and R.max() > 1.01 / KAPPA
+    # and the sampled check is rigorous where it passes
+    okA, okB, lo, hi = blend_check(nA, pA, cA, nB, pB, cB, roomA, roomB, KAPPA, kern)
+    good = okA & okB
+    assert good.any() and (~good).any()
