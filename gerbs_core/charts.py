@@ -385,8 +385,8 @@ def eval_envelopes(envelopes, corner_env, env_offset, corners: np.ndarray, theta
         env = envelopes[es[a]]
         ti = th2[idx] - env_offset[rows_c[idx]][:, None]
         if not env.closed:
-            # stay inside [theta_0, theta_K]: the open envelope's last knot interval can
-            # be empty (repeated end knot), which would divide by zero exactly at theta_K
-            ti = np.clip(ti, env.theta[0], np.nextafter(env.theta[-1], -np.inf))
+            # stay inside [theta_0, theta_K] (round-off of the unfolded angle; outside,
+            # the end lines would be extrapolated)
+            ti = np.clip(ti, env.theta[0], env.theta[-1])
         out[:, idx] = env.u_derivs(ti, nu)
     return [out[k].reshape(theta.shape) for k in range(nu + 1)]

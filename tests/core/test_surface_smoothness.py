@@ -162,9 +162,9 @@ CURVED = ("icosphere", "uv_sphere", "mixed_bent", "wavy_quads")
 #  * delaunay, metric: hull slivers (angles down to 0.1 degree): faces 1.5e-3 thin,
 #    narrower than the 8-point stencil's reach 7h, so no step-1e-3 difference
 #    quotient resolves them.
-#  * mixed_bent, metric: C2 1.1e-5 at a spoke where the size functions of both ends
-#    are close to their support boundary (g ~ 0.9, where ERBS's high derivatives
-#    peak); truncation error, not a kink: it falls 20x, then 11x per halving of h.
+#  * mixed_bent, metric: C2 1.1e-5 at 3/4 of the spoke 15 -> 16, where psi_15 is
+#    near its support boundary (g = 0.88: ERBS's high derivatives peak there);
+#    truncation error, not a kink: it falls 20x, then 11x per halving of h.
 FD_LIMIT = {("wavy_quads", "metric"): (1e-5, 1e-4), ("mixed_bent", "metric"): (1e-5, 2e-5)}
 THIN = {("delaunay", "metric")}
 
