@@ -27,9 +27,10 @@ LINEAR in y) or a constant radius (a = 0). Three certified constructions
 * ``"blend"`` (default): the edges' own lines, pulled in by c in [kappa, 1],
   blended DIRECTLY across each corner by one GERBS transition as wide as the
   certified bound allows (up to half of each adjacent edge; collinear edges
-  merged). Widest transitions: on the test meshes max |U + U''|/U 4-11 where
-  the fillets gave 25-80. Certified by a rigorous bilinear bound
-  (:func:`~gerbs_core._envelope_build.blend_check`), not by the argument below;
+  merged). Widest transitions: on the test meshes max |U + U''|/U 3.7-15 where
+  the fillets gave 4.7-80. Certified by rigorous bounds
+  (:func:`~gerbs_core._envelope_build.closed_form_fit`,
+  :func:`~gerbs_core._envelope_build.blend_check`), not by the argument below;
 * ``"fillet"``: exact edge lines, each corner rounded by an inscribed arc
   (knots on the rays of arc points; chords / tangents as local lines);
 * ``"constant"``: DESIGN's rule (knots at the corners, bisection while
