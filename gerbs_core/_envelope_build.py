@@ -303,6 +303,49 @@ def blend_scales(convex_start, convex_end, kappa):
     return np.where(has_c & has_r, 0.5 * (1.0 + cc), np.where(has_c, cc, 1.0)).astype(float)
 
 
+ADAPTIVE_SCALES = True
+_C_MAX = 0.97             # adaptive c of a convex-cornered line stays <= this
+
+
+def adaptive_scales(n_edges, ea, eb, nA, pA, nB, pB, roomA, roomB, kappa, kernel):
+    """Per edge line the scale c as close to 1 as its corners allow while their
+    transitions can still fill the whole room (bigger supports, thicker cover).
+
+    Corner (edges ea -> eb): the closed-form bound of :func:`closed_form_fit`
+    at the full room needs the allowance need = W D G on each side; a convex
+    corner then wants c <= 1 - need (allowance 1 - c), a reflex one
+    c >= kappa (1 + need) (allowance c / kappa - 1). Each edge takes the
+    tightest of its corners' wishes (c in [kappa, 1], <= _C_MAX next to a convex
+    corner; conflicting wishes: halfway). Only the quality depends on this
+    choice; the certification of the widths follows it.
+    """
+    tau = np.abs(nB - nA)
+    convex = (nB - nA) > 0
+    straight = tau <= 1e-12
+    W = roomA + roomB
+    al = roomA / W
+    G = overshoot_profile(kernel)
+    n = len(G) - 1
+    gA = G[np.clip(np.ceil(al * n).astype(int), 0, n)]
+    gB = G[np.clip(np.ceil((1.0 - al) * n).astype(int), 0, n)]
+    eA = np.minimum(np.cos(-roomA - nA) ** 2, np.cos(nA) ** 2)
+    eB = np.minimum(np.cos(roomB - nB) ** 2, np.cos(nB) ** 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        need = np.fmax(W * (pA / pB) * np.sin(tau) * gA / eA,
+                       W * (pB / pA) * np.sin(tau) * gB / eB)
+    need = np.where(np.isfinite(need), need, np.inf)
+    hi = np.ones(n_edges)
+    lo = np.full(n_edges, kappa)
+    cvx = convex & ~straight
+    rfx = ~convex & ~straight
+    up = np.clip(1.0 - 1.2 * need, max(kappa, CONVEX_SCALE), _C_MAX)
+    dn = np.clip(kappa * (1.0 + 1.2 * need), kappa, 1.0)
+    for e in (ea, eb):
+        np.minimum.at(hi, e[cvx], up[cvx])
+        np.maximum.at(lo, e[rfx], dn[rfx])
+    return np.where(lo <= hi, hi, 0.5 * (lo + hi))
+
+
 def blend_check(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMPLES,
                 chunk=1024):
     """Certify the corner transitions u~ = (1 - F(w)) uA / cA + F(w) uB / cB.
@@ -514,7 +557,6 @@ def build_blend(theta, normal, dist, closed, span, kappa, kernel):
     cend = np.full(P, None, dtype=object)
     cstart[cj] = convex
     cend[pj] = convex
-    c = blend_scales(cstart, cend, kappa)
     width = t1 - t0
     # room: half an edge between two corners, the whole edge next to an open end
     roomA = np.where(cstart[pj] == None, 1.0, 0.5) * width[pj]    # noqa: E711
@@ -522,6 +564,10 @@ def build_blend(theta, normal, dist, closed, span, kappa, kernel):
     if not closed:
         roomA = np.where(pj == 0, width[pj], roomA)
         roomB = np.where(cj == P - 1, width[cj], roomB)
+    if ADAPTIVE_SCALES:
+        c = adaptive_scales(P, pj, cj, nA, sp[pj], nB, sp[cj], roomA, roomB, kappa, kernel)
+    else:
+        c = blend_scales(cstart, cend, kappa)
     wa, wb, ok, Rmin, Rmax = fit_blend_widths(nA, sp[pj], c[pj], nB, sp[cj], c[cj],
                                               roomA, roomB, kappa, kernel)
     if not ok.all():

@@ -140,7 +140,8 @@ class PlanarStarCover:
         :func:`~gerbs_core._envelope_build.blend_check` certifies
         kappa rho <= rho~/shrink <= rho on it (rigorous bound, not sampling).
         """
-        from ._envelope_build import blend_scales, fit_blend_widths
+        from ._envelope_build import (ADAPTIVE_SCALES, adaptive_scales, blend_scales,
+                                      fit_blend_widths)
         E = len(self.delta)
         e = np.flatnonzero(self.next_edge >= 0)
         f = self.next_edge[e]
@@ -150,9 +151,13 @@ class PlanarStarCover:
         cstart = np.full(E, None, dtype=object)
         cend = np.full(E, None, dtype=object)
         cstart[f], cend[e] = cvx, cvx
-        self.c = blend_scales(cstart, cend, self.kappa)
         roomA = self.delta[e] * np.where(self.prev_edge[e] >= 0, 0.5, 1.0)
         roomB = self.delta[f] * np.where(self.next_edge[f] >= 0, 0.5, 1.0)
+        if ADAPTIVE_SCALES:
+            self.c = adaptive_scales(E, e, f, nA, self.p[e], nB, self.p[f], roomA, roomB,
+                                     self.kappa, self.kernel)
+        else:
+            self.c = blend_scales(cstart, cend, self.kappa)
         # coarser than the mesh envelopes (8 sub-intervals, factor 0.7): N can be 1e5+
         wa, wb, ok, _, _ = fit_blend_widths(nA, self.p[e], self.c[e], nB, self.p[f], self.c[f],
                                             roomA, roomB, self.kappa, self.kernel, 8, 0.7)
