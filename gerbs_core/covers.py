@@ -10,8 +10,10 @@ It follows the gauge rule of DESIGN section 4 (same as ``gauge.StarGauge``):
   rho(t) = p_e / cos(t - nu_e) on each boundary edge e, t the angle from the
   direction to the edge's first corner;
 * u~ = 1/rho~ is a GERBS spline in the angle whose local functions are the edges'
-  own lines u_e = cos(t - nu_e)/p_e, pulled in by c_e in [kappa, 1] (kappa at
-  edges between convex corners, 1 between reflex ones), with ONE transition per
+  own lines u_e = cos(t - nu_e)/p_e, pulled in by c_e in [kappa, 1] (0.9-0.97
+  next to convex corners, as close to 1 as lets their transitions fill the room:
+  :func:`gerbs_core._envelope_build.adaptive_scales`; 1 between reflex ones),
+  with ONE transition per
   corner, as wide as certified (up to half of each adjacent edge, see
   ``_subdivide`` and :func:`gerbs_core._envelope_build.blend_check`), so
   kappa rho <= rho~ <= rho; then rho~ is scaled by ``shrink`` = 0.95. (The
@@ -133,7 +135,7 @@ class PlanarStarCover:
 
         u~ = 1/rho~ is a GERBS spline in the angle whose local functions are the
         edges' own lines u_e = cos(t - nu_e) / p_e pulled in by c_e (kappa <= c_e
-        <= 1, from the types of the edge's two corners), blended across each
+        <= 1, from the edge's two corners: ``adaptive_scales``), blended across each
         corner over [delta_e - R_e, delta_e] of edge e and [0, L_f] of the next
         edge f: one transition per corner, initially half of each edge (the
         whole edge at an open end), narrowed until
