@@ -160,9 +160,8 @@ class PlanarStarCover:
                                      self.kappa, self.kernel)
         else:
             self.c = blend_scales(cstart, cend, self.kappa)
-        # coarser than the mesh envelopes (8 sub-intervals, factor 0.7): N can be 1e5+
         wa, wb, ok, _, _ = fit_blend_widths(nA, self.p[e], self.c[e], nB, self.p[f], self.c[f],
-                                            roomA, roomB, self.kappa, self.kernel, 8, 0.7)
+                                            roomA, roomB, self.kappa, self.kernel)
         if not ok.all():
             raise InvalidPointSetError(
                 "no certified smooth gauge at a corner of these stars (degenerate polygon); "
