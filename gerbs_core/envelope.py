@@ -27,7 +27,7 @@ LINEAR in y) or a constant radius (a = 0). Three certified constructions
 * ``"blend"`` (default): the edges' own lines, pulled in by c in [kappa, 1],
   blended DIRECTLY across each corner by one GERBS transition as wide as the
   certified bound allows (up to half of each adjacent edge; collinear edges
-  merged). Widest transitions: on the test meshes max |U + U''|/U 3.7-15 where
+  merged). Widest transitions: on the test meshes max |U + U''|/U 3.7-12 where
   the fillets gave 4.7-80. Certified by rigorous bounds
   (:func:`~gerbs_core._envelope_build.closed_form_fit`,
   :func:`~gerbs_core._envelope_build.blend_check`), not by the argument below;
