@@ -38,10 +38,10 @@ LINEAR in y) or a constant radius (a = 0). Three certified constructions
   intervals beside a knot); the fallback for slivers.
 
 Guarantee of "fillet" and "constant" (proved, and certified numerically at
-construction): every local function satisfies kappa * rho <= 1/u_j <= rho on the knot intervals where
-it is used (checked where the ratio can be extremal: the ratio of two line
-radii is monotone, a constant over p/cos(theta - n) is extremal only at the
-ends or at theta = n); (*) is a convex combination, so
+construction): every local function satisfies kappa * rho <= 1/u_j <= rho on
+the knot intervals where it is used (checked where the ratio can be extremal:
+the ratio of two line radii is monotone, a constant over p/cos(theta - n) is
+extremal only at the ends or at theta = n); (*) is a convex combination, so
 
     kappa * shrink * rho <= rho~ <= shrink * rho     everywhere.
 
