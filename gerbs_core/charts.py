@@ -253,32 +253,6 @@ def star_boundary(topo, charts: VertexCharts, corners2d: np.ndarray, v: int, fir
     return th, rr
 
 
-OPEN_CHAIN_MAX_SPAN = 1.8 * np.pi
-
-
-def _open_chains(angles: np.ndarray):
-    """Split an open fan (sector angles) into chains spanning < OPEN_CHAIN_MAX_SPAN.
-
-    Returns [(first, last, use_first, use_last)]: the chain's sectors and the
-    sectors it serves. Interior seams are served by chains extending at least
-    one sector beyond them, so the (local) corner rounding at each served
-    sector's spokes is the same as in the whole fan.
-    """
-    k = len(angles)
-    if angles.sum() < OPEN_CHAIN_MAX_SPAN:
-        return [(0, k - 1, 0, k - 1)]
-    chains, use = [], 0
-    while use < k:
-        a = max(use - 1, 0)
-        b = a
-        while b + 1 < k and angles[a:b + 2].sum() < OPEN_CHAIN_MAX_SPAN:
-            b += 1
-        use_last = b if b == k - 1 else max(b - 1, use)
-        chains.append((a, b, use, use_last))
-        use = use_last + 1
-    return chains
-
-
 def far_corner_polar(topo, charts: VertexCharts, corners2d):
     """Per corner c: unfolded polar (theta, r) of its face's corners next(c) ... prev(c).
 
@@ -322,9 +296,10 @@ def build_envelopes(topo, charts: VertexCharts, corners2d, kappa=0.8, shrink=0.9
 
     Returns (envelopes (list), corner_envelope (C,) int, corner_offset (C,)): the
     envelope serving each corner's sector, evaluated at theta - corner_offset.
-    One closed envelope per interior vertex; open fans whose span reaches
-    OPEN_CHAIN_MAX_SPAN (possible in mode "regular") are served by overlapping
-    open chains. Stars of the same shape up to rotation (e.g. equal valence and
+    One closed envelope per interior vertex, one open envelope per boundary
+    fan (its unfolded span may exceed 2*pi in mode "regular": the envelope is
+    a function of the unfolded angle, only the chart angle is compressed).
+    Stars of the same shape up to rotation (e.g. equal valence and
     face sizes in mode "regular") share one object.
     """
     from .envelope import RadialEnvelope
@@ -378,12 +353,9 @@ def build_envelopes(topo, charts: VertexCharts, corners2d, kappa=0.8, shrink=0.9
             corner_env[star] = e
             env_offset[star] = charts.theta0[rot[0]]
             continue
-        st = np.asarray(star)
-        for a, b, ua, ub in _open_chains(charts.alpha[st]):
-            sub = star[a:b + 1]
-            e = get(sigs[a:b + 1], False, lambda: chain(sub))
-            corner_env[st[ua:ub + 1]] = e
-            env_offset[st[ua:ub + 1]] = th_l[sub[0]][0]
+        e = get(sigs, False, lambda: chain(star))
+        corner_env[star] = e
+        env_offset[star] = th_l[star[0]][0]
     return envs, corner_env, env_offset
 
 
@@ -413,8 +385,8 @@ def eval_envelopes(envelopes, corner_env, env_offset, corners: np.ndarray, theta
         env = envelopes[es[a]]
         ti = th2[idx] - env_offset[rows_c[idx]][:, None]
         if not env.closed:
-            # stay inside [theta_0, theta_K]: the open envelope's last knot interval can
-            # be empty (repeated end knot), which would divide by zero exactly at theta_K
-            ti = np.clip(ti, env.theta[0], np.nextafter(env.theta[-1], -np.inf))
+            # stay inside [theta_0, theta_K] (round-off of the unfolded angle; outside,
+            # the end lines would be extrapolated)
+            ti = np.clip(ti, env.theta[0], env.theta[-1])
         out[:, idx] = env.u_derivs(ti, nu)
     return [out[k].reshape(theta.shape) for k in range(nu + 1)]

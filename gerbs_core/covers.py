@@ -9,14 +9,16 @@ It follows the gauge rule of DESIGN section 4 (same as ``gauge.StarGauge``):
 * the exact radius of the polygon about its centre is piecewise
   rho(t) = p_e / cos(t - nu_e) on each boundary edge e, t the angle from the
   direction to the edge's first corner;
-* rho~ is a GERBS spline with constant coefficients along each edge's angle
-  interval: knots at every corner direction, each interval split into S_e equal
-  parts of the log-radius variable v = asinh(tan(t - nu_e)) (a smooth monotone
-  reparametrization of the angle in which |d ln rho/dv| <= 1), S_e chosen so
-  that rho~ >= kappa rho (kappa = 0.8; see ``_subdivide``); coefficient at a knot
-  = min of rho over the two sub-intervals beside it, so rho~ <= rho everywhere;
-  then rho~ is scaled by ``shrink`` = 0.95. (Equal parts in v instead of the angle
-  keep the bound kappa without any cap on S_e at thin hull triangles.)
+* u~ = 1/rho~ is a GERBS spline in the angle whose local functions are the edges'
+  own lines u_e = cos(t - nu_e)/p_e, pulled in by c_e in [kappa, 1] (0.9-0.97
+  next to convex corners, as close to 1 as lets their transitions fill the room:
+  :func:`gerbs_core._envelope_build.adaptive_scales`; 1 between reflex ones),
+  with ONE transition per
+  corner, as wide as certified (up to half of each adjacent edge, see
+  ``_subdivide`` and :func:`gerbs_core._envelope_build.blend_check`), so
+  kappa rho <= rho~ <= rho; then rho~ is scaled by ``shrink`` = 0.95. (The
+  earlier rule -- constants at knots in the log-radius variable -- made rho~ a
+  staircase whose derivatives jumped by O(1) within 1e-4 on the unit square.)
 * Thickness of the Delaunay cover is guaranteed: in a triangle the exact gauge of
   vertex a is 1 - lambda_a (barycentric), max lambda >= 1/3, and
   rho~ >= kappa shrink rho = 0.76 rho > 2/3 rho, so some psi_a >= b(0.667/0.76) > 0.
@@ -128,49 +130,53 @@ class PlanarStarCover:
 
     # -- the envelope -----------------------------------------------------
     def _subdivide(self):
-        """Knots of the envelope in the log-radius variable v (no coefficient table).
+        """Corner transitions of the envelope (DESIGN section 4, same rule as
+        :func:`gerbs_core._envelope_build.build_blend`).
 
-        On edge e, with phi = t - nu_e, v = asinh(tan phi) (the inverse Gudermannian)
-        gives rho = p_e cosh(v), so |d ln rho / dv| = |tanh v| <= 1. The edge's
-        v-range [v0, v1] is split into S_e = ceil((v1 - v0)/dv_max) equal parts,
-        dv_max = ln(1/kappa)/2; the coefficient at knot k is the min of rho over the
-        two sub-intervals beside it (across the corner: the neighbour edge's first or
-        last sub-interval), in closed form p cosh(clip(0, a, b)). Hence
-        shrink kappa rho <= rho~ <= shrink rho everywhere, with no cap on S_e, also
-        at thin hull triangles; coefficients are computed on the fly (memory O(E)).
+        u~ = 1/rho~ is a GERBS spline in the angle whose local functions are the
+        edges' own lines u_e = cos(t - nu_e) / p_e pulled in by c_e (kappa <= c_e
+        <= 1, from the edge's two corners: ``adaptive_scales``), blended across each
+        corner over [delta_e - R_e, delta_e] of edge e and [0, L_f] of the next
+        edge f: one transition per corner, initially half of each edge (the
+        whole edge at an open end), narrowed until
+        :func:`~gerbs_core._envelope_build.blend_check` certifies
+        kappa rho <= rho~/shrink <= rho on it (rigorous bound, not sampling).
         """
-        self.v0 = np.arcsinh(np.tan(-self.nu))
-        self.v1 = np.arcsinh(np.tan(self.delta - self.nu))
-        dv_max = 0.5 * np.log(1.0 / self.kappa)
-        self.S = np.maximum(1, np.ceil((self.v1 - self.v0) / dv_max - 1e-9)).astype(np.int64)
-        self.dv = (self.v1 - self.v0) / self.S
+        from ._envelope_build import (ADAPTIVE_SCALES, adaptive_scales, blend_scales,
+                                      fit_blend_widths)
+        E = len(self.delta)
+        e = np.flatnonzero(self.next_edge >= 0)
+        f = self.next_edge[e]
+        nA, nB = self.nu[e] - self.delta[e], self.nu[f]
+        tau = nB - nA
+        cvx = np.where(np.abs(tau) <= 1e-12, None, tau > 0).astype(object)
+        cstart = np.full(E, None, dtype=object)
+        cend = np.full(E, None, dtype=object)
+        cstart[f], cend[e] = cvx, cvx
+        roomA = self.delta[e] * np.where(self.prev_edge[e] >= 0, 0.5, 1.0)
+        roomB = self.delta[f] * np.where(self.next_edge[f] >= 0, 0.5, 1.0)
+        if ADAPTIVE_SCALES:
+            self.c = adaptive_scales(E, e, f, nA, self.p[e], nB, self.p[f], roomA, roomB,
+                                     self.kappa, self.kernel)
+        else:
+            self.c = blend_scales(cstart, cend, self.kappa)
+        wa, wb, ok, _, _ = fit_blend_widths(nA, self.p[e], self.c[e], nB, self.p[f], self.c[f],
+                                            roomA, roomB, self.kappa, self.kernel)
+        if not ok.all():
+            raise InvalidPointSetError(
+                "no certified smooth gauge at a corner of these stars (degenerate polygon); "
+                "offending points", np.unique(self.edge_star[e[~ok]]))
+        self.R, self.L = np.zeros(E), np.zeros(E)
+        self.R[e], self.L[f] = wa, wb
         # rho is convex on each edge: its max is at a corner, and rho~ <= rho
         self.support_radius = np.zeros(len(self.centers))
         np.maximum.at(self.support_radius, self.edge_star, self.shrink * self._corner_r)
-        # a lower bound of rho~ per star (for the phi radii of the general basis)
-        rmin = self.p * np.cosh(np.clip(0.0, self.v0, self.v1))
+        # a lower bound of rho~ per star (for the phi radii of the general basis):
+        # min of rho over the edge is p at the foot nu if inside, else at an end
+        phi = np.clip(self.nu, 0.0, self.delta) - self.nu
+        rmin = self.p / np.cos(phi)
         self.min_radius = np.full(len(self.centers), np.inf)
         np.minimum.at(self.min_radius, self.edge_star, self.shrink * self.kappa * rmin)
-
-    def _window_min(self, e, a, b):
-        """min of rho over v in [a, b] on edge e."""
-        return self.p[e] * np.cosh(np.clip(0.0, a, b))
-
-    def coefficient(self, e, k):
-        """Spline coefficient at knot k (0..S_e) of edge e (before shrink)."""
-        v0, dv, S = self.v0[e], self.dv[e], self.S[e]
-        vk = v0 + k * dv
-        c = self._window_min(e, np.maximum(vk - dv, v0), np.minimum(vk + dv, self.v1[e]))
-        pe, ne = self.prev_edge[e], self.next_edge[e]
-        at0 = (k == 0) & (pe >= 0)
-        if np.any(at0):
-            q = pe[at0]
-            c[at0] = np.minimum(c[at0], self._window_min(q, self.v1[q] - self.dv[q], self.v1[q]))
-        atS = (k == S) & (ne >= 0)
-        if np.any(atS):
-            q = ne[atS]
-            c[atS] = np.minimum(c[atS], self._window_min(q, self.v0[q], self.v0[q] + self.dv[q]))
-        return c
 
     def measured_kappa(self, per_edge=16):
         """min of rho~ / (shrink rho) on a uniform sample of angles of every edge."""
@@ -180,30 +186,50 @@ class PlanarStarCover:
         rt = self.rho_tilde(e, t)[0]
         return float(np.min(rt / (self.shrink * self.p[e] / np.cos(t - self.nu[e]))))
 
+    def u_tilde(self, e, t, nu=0):
+        """U = 1/rho~ (after shrink) on edge e at angle t in [0, delta_e], with its
+        t-derivatives up to ``nu``: list of arrays. Exact to rounding."""
+        e = np.asarray(e)
+        t = np.asarray(t, dtype=np.float64)
+        if self.exact:
+            ph = t - self.nu[e]
+            k = 1.0 / (self.shrink * self.p[e])
+            return [k * np.cos(ph), -k * np.sin(ph), -k * np.cos(ph)][: nu + 1]
+        g, f = self.prev_edge[e], self.next_edge[e]
+        left = (g >= 0) & (t < self.L[e])
+        right = (f >= 0) & (t > self.delta[e] - self.R[e]) & ~left
+        ia, ib = np.where(left, g, e), np.where(right, f, e)
+        ta = np.where(left, t + self.delta[ia], t)
+        tb = np.where(right, t - self.delta[e], t)
+        width = np.where(left, self.R[ia] + self.L[e], np.where(right, self.R[e] + self.L[ib], 1.0))
+        w = np.where(left, (t + self.R[ia]) / width,
+                     np.where(right, (t - self.delta[e] + self.R[e]) / width, 0.0))
+        w = np.clip(w, 0.0, 1.0)
+        F = self.kernel.cdf_derivs(np.atleast_1d(w).ravel(), nu)
+        F = [np.where(left | right, Fi.reshape(w.shape), 0.0) for Fi in F]
+        ka = 1.0 / (self.shrink * self.c[ia] * self.p[ia])
+        kb = 1.0 / (self.shrink * self.c[ib] * self.p[ib])
+        pa, pb = ta - self.nu[ia], tb - self.nu[ib]
+        A = [ka * np.cos(pa), -ka * np.sin(pa), -ka * np.cos(pa)]
+        B = [kb * np.cos(pb), -kb * np.sin(pb), -kb * np.cos(pb)]
+        D = [bi - ai for ai, bi in zip(A, B)]
+        out = [A[0] + F[0] * D[0]]
+        if nu >= 1:
+            out.append(A[1] + F[0] * D[1] + F[1] / width * D[0])
+        if nu >= 2:
+            out.append(A[2] + F[0] * D[2] + 2 * F[1] / width * D[1] + F[2] / width ** 2 * D[0])
+        return out
+
     def rho_tilde(self, e, t, nu=0):
         """The smooth radius rho~ (after shrink) on edge e at angle t in [0, delta_e],
         with its t-derivatives up to ``nu``: list of arrays."""
-        phi = t - self.nu[e]
-        sec = 1.0 / np.cos(phi)
-        tan = np.tan(phi)
-        if self.exact:
-            p = self.shrink * self.p[e]
-            out = [p * sec, p * sec * tan, p * (sec * tan ** 2 + sec ** 3)]
-            return out[: nu + 1]
-        S, dv = self.S[e], self.dv[e]
-        x = (np.arcsinh(tan) - self.v0[e]) / dv
-        s = np.clip(np.floor(x), 0, S - 1).astype(np.int64)
-        u = np.clip(x - s, 0.0, 1.0)
-        F = self.kernel.cdf_derivs(u, nu)
-        c0 = self.coefficient(e, s)
-        dc = self.coefficient(e, s + 1) - c0
-        out = [self.shrink * (c0 + dc * F[0])]
+        u = self.u_tilde(e, t, nu)
+        inv = 1.0 / u[0]
+        out = [inv]
         if nu >= 1:
-            du = sec / dv                       # du/dt
-            out.append(self.shrink * dc * F[1] * du)
+            out.append(-u[1] * inv ** 2)
         if nu >= 2:
-            ddu = sec * tan / dv
-            out.append(self.shrink * dc * (F[2] * du ** 2 + F[1] * ddu))
+            out.append(2 * u[1] ** 2 * inv ** 3 - u[2] * inv ** 2)
         return out
 
     # -- lookup and evaluation -------------------------------------------
@@ -255,8 +281,8 @@ class PlanarStarCover:
         t = np.where(r > 0, t, 0.0)
         inside = (t >= -1e-12) & (t <= self.delta[e] + 1e-12)
         t = np.clip(t, 0.0, self.delta[e])
-        rt = self.rho_tilde(e, t, nu)
-        G = r / rt[0]
+        U = self.u_tilde(e, t, nu)
+        G = r * U[0]
         bt = bump_from_t(G, self.kernel, nu)
         vv = np.where(inside, bt[0], 0.0)
         v[rows, cols] = vv
@@ -264,13 +290,12 @@ class PlanarStarCover:
             safe = np.where(r > 0, r, 1.0)
             er = y / safe[:, None]
             et = np.stack([-er[:, 1], er[:, 0]], -1)
-            hh = 1.0 / rt[0]                               # g = r * hh(theta)
-            h1 = -rt[1] / rt[0] ** 2
+            hh, h1 = U[0], U[1]                             # g = r * U(theta)
             gg = hh[:, None] * er + h1[:, None] * et
             live = inside & (r > 0) & (G < 1.0)
             g[rows, cols] = np.where(live[:, None], bt[1][:, None] * gg, 0.0)
             if nu >= 2:
-                h2 = -rt[2] / rt[0] ** 2 + 2.0 * rt[1] ** 2 / rt[0] ** 3
+                h2 = U[2]
                 Hg = ((hh + h2) / safe)[:, None, None] * et[:, :, None] * et[:, None, :]
                 Hp = bt[2][:, None, None] * gg[:, :, None] * gg[:, None, :] + bt[1][:, None, None] * Hg
                 h[rows, cols] = np.where(live[:, None, None], Hp, 0.0)

@@ -14,56 +14,62 @@ def f(p):
     return np.sin(3 * p[..., 0]) * np.cos(2 * p[..., 1]) + p[..., 0] ** 3
 
 
-def _ext(a):
-    """Quadratic extrapolation to 0 from samples at h, 2h, 3h: the one-sided limit."""
-    return 3 * a[0] - 3 * a[1] + a[2]
+def _extrapolation_weights(n):
+    """w (n,) with w @ [p(1), ..., p(n)] = p(0) for polynomials of degree < n."""
+    V = np.vander(np.arange(1, n + 1, dtype=float), n, increasing=True)
+    return np.linalg.solve(V.T, np.eye(n)[0])
 
 
-def spoke_jumps(interp, i, h=1e-4):
-    """Largest relative jump of the one-sided first and second derivatives of psi_i and
-    of the interpolant across every spoke of the star of vertex i.
+def spoke_jumps(interp, i, h=1e-4, n=7, fracs=(0.3, 0.6, 0.9)):
+    """Largest relative jumps of the one-sided first and second derivatives of psi_i
+    and of the interpolant across every spoke of the star of vertex i (the spokes
+    between two of its triangles; the open ends of a hull star are not spokes).
 
-    The one-sided derivatives are the analytic derivatives at distance h, 2h, 3h on
-    each side of the spoke, extrapolated to the spoke (error O(h^3))."""
+    One-sided limits: the analytic derivatives at distance h, 2h, ..., n h on each
+    side of the spoke (at fracs of rho~ along it), extrapolated to the spoke by the
+    degree n-1 polynomial through them (error O(h^n) times the n-th derivative
+    across the spoke; n = 7 because ERBS's high derivatives are large, as in
+    tests/core/test_surface_smoothness.fd_jumps). Relative to the derivative scale
+    of the star (max over all its samples), not to the local magnitude, which
+    vanishes where psi_i flattens out (ERBS is flat at 0 and 1)."""
     cov = interp.cover
-    out = np.zeros(4)
-    for e in np.flatnonzero(cov.edge_star == i):
+    W = _extrapolation_weights(n)
+    jumps, scale = np.zeros(4), np.zeros(4)
+    for e in np.flatnonzero((cov.edge_star == i) & (cov.prev_edge >= 0)):
         rk = cov.rho_tilde(np.array([e]), np.array([0.0]))[0][0]
         d = cov.a0[e] / np.linalg.norm(cov.a0[e])
-        xs = cov.centers[i] + 0.6 * rk * d                 # where psi_i is in transition
         nrm = np.array([-d[1], d[0]])
-        s = np.array([1, 2, 3, -1, -2, -3]) * h
-        pts = xs + s[:, None] * nrm
-        _, g, H = cov.psi_jet(pts, np.full((6, 1), i), None, 2)
-        g, H = g[:, 0], H[:, 0]
-        Fg, FH = interp(pts, 1), interp(pts, 2)
-        for k, a in enumerate((g, H, Fg, FH)):
-            jump = np.abs(_ext(a[:3]) - _ext(a[3:])).max() / np.abs(a).max()
-            out[k] = max(out[k], jump)
-    return out
+        s = np.concatenate([np.arange(1, n + 1), -np.arange(1, n + 1)]) * h
+        for fr in fracs:
+            pts = cov.centers[i] + fr * rk * d + s[:, None] * nrm
+            _, g, H = cov.psi_jet(pts, np.full((2 * n, 1), i), None, 2)
+            for k, a in enumerate((g[:, 0], H[:, 0], interp(pts, 1), interp(pts, 2))):
+                lim_p = np.tensordot(W, a[:n], 1)
+                lim_m = np.tensordot(W, a[n:], 1)
+                jumps[k] = max(jumps[k], np.abs(lim_p - lim_m).max())
+                scale[k] = max(scale[k], np.abs(a).max())
+    return jumps / np.maximum(scale, 1e-300)
 
 
-@pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
 def test_no_jump_across_spokes_and_kinked_gauge_is_flagged(seed):
-    # h = 1e-4 must resolve the smooth transition of the GERBS envelope at a knot
-    # (the ERBS flat band there is ~1e-2 of a sub-interval): points in [0, 1000]^2.
+    """Issue 3: on the UNIT square (12 random points, Delaunay stars; every vertex,
+    hull stars included), psi_i and the interpolant have no jump of their first
+    and second derivatives across the spokes at step h = 1e-4 (relative <= 1e-6);
+    the same test flags the kinked exact polygon radius."""
     rng = np.random.default_rng(seed)
-    P = rng.random((12, 2)) * 1000.0
-
-    def g(p):
-        return f(p / 1000.0)
-
-    smooth = GERBSInterpolator(P, g(P))
-    kinked = GERBSInterpolator(P, g(P), exact_gauge=True)
-    interior = [i for i in range(len(P)) if np.all(smooth.cover.next_edge[smooth.cover.edge_star == i] >= 0)]
-    assert interior
-    js = np.max([spoke_jumps(smooth, i) for i in interior], axis=0)
-    jk = np.max([spoke_jumps(kinked, i) for i in interior], axis=0)
+    P = rng.random((12, 2))
+    smooth = GERBSInterpolator(P, f(P))
+    kinked = GERBSInterpolator(P, f(P), exact_gauge=True)
+    js = np.max([spoke_jumps(smooth, i) for i in range(len(P))], axis=0)
+    jk = np.max([spoke_jumps(kinked, i) for i in range(len(P))], axis=0)
+    print(f"spoke jumps seed {seed}: psi d1 {js[0]:.1e} d2 {js[1]:.1e}, interpolant d1 "
+          f"{js[2]:.1e} d2 {js[3]:.1e}; kinked {np.array2string(jk, precision=2)}")
     assert np.all(js <= 1e-6), js
     # psi_i of the exact polygon radius has kinks: first and second derivatives jump,
     # for psi_i and (damped by the normalization and the smooth data) for the interpolant
-    assert jk[0] > 1e-2 and jk[1] > 1e-2, jk
-    assert jk[2] > 1e-3 and jk[3] > 1e-3, jk
+    assert jk[0] > 1e-1 and jk[1] > 1e-1, jk
+    assert jk[2] > 1e-3 and jk[3] > 1e-2, jk
 
 
 def test_support_inside_star_and_envelope_below_radius():
@@ -166,8 +172,7 @@ def test_ball_cover_supports_and_guaranteed_thickness(n):
 
 def test_batched_exact_gauge_matches_gauge_module():
     """The batched planar gauge (covers.PlanarStarCover) and gauge.StarGauge compute
-    the same psi, gradient and Hessian for the exact polygon radius (their smooth
-    envelopes use different knot placements: equal parts in log-radius here)."""
+    the same psi, gradient and Hessian for the exact polygon radius."""
     from gerbs_core.covers import polygon_cover
     from gerbs_core.gauge import StarGauge
     from gerbs_core.kernels import ERBS
@@ -206,3 +211,23 @@ def test_one_sided_limits_on_the_spokes_unit_square():
                 assert rel.max() <= 1e-10
             else:
                 assert np.median(rel) > 1e-2
+
+
+def test_envelope_bounds_dense_on_a_large_cover():
+    """kappa shrink rho <= rho~ <= shrink rho at 64 angles on every edge of the
+    Delaunay stars of 2000 random points (thin hull triangles and nearly radial
+    edges included): the transition widths are certified, not sampled."""
+    from gerbs_core.covers import delaunay_cover
+    from gerbs_core.kernels import ERBS
+    P = np.random.default_rng(11).random((2000, 2))
+    cov, _, _ = delaunay_cover(P, ERBS())
+    E = len(cov.delta)
+    e = np.repeat(np.arange(E), 64)
+    t = np.tile(np.linspace(0.0, 1.0, 64), E) * cov.delta[e]
+    ratio = cov.rho_tilde(e, t)[0] / (cov.shrink * cov.p[e] / np.cos(t - cov.nu[e]))
+    # (rounding: rho = p / cos(t - nu) loses ~1e-11 relative on nearly radial edges,
+    # where a reflex-only edge's line is used unscaled, c = 1)
+    assert ratio.max() <= 1 + 1e-10 and ratio.min() >= cov.kappa * (1 - 1e-10)
+    # one transition per corner, inside the two edges
+    assert np.all(cov.L + cov.R <= cov.delta * (1 + 1e-12))
+    assert np.all(cov.R[cov.next_edge >= 0] > 0) and np.all(cov.L[cov.prev_edge >= 0] > 0)
