@@ -48,7 +48,10 @@ def test_moving_one_vertex_changes_only_its_3_ring(blender, kind, w):
     assert rings[changed].max() <= 3
     column = W[:, w]
     depends = set(column.indices.tolist())
-    strong = set(column.indices[np.abs(column.data) > 1e-6].tolist())
+    # a weight "moves" its sample only if 0.05 * |w| exceeds the float32 resolution of
+    # the evaluated positions (Blender stores positions as float32)
+    res = 2.0 * np.spacing(np.float32(np.abs(P0).max()))
+    strong = set(column.indices[0.05 * np.abs(column.data) > res].tolist())
     assert set(changed.tolist()) <= depends      # nothing outside the stencil's support moved
     assert strong <= set(changed.tolist())       # everything with a real weight moved
     assert rings[sorted(depends)].max() <= 3
