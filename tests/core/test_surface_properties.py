@@ -36,7 +36,14 @@ SETTINGS = dict(deadline=None, derandomize=True, database=None, phases=(Phase.ex
 N_SURFACE_CASES = 360
 N_KERNEL_CASES = 120
 
-# ERBS parameters drawn from the guaranteed box (docs/robustness.md)
+# ERBS parameters drawn from the guaranteed box (docs/robustness.md). Outside it lies
+# a KNOWN BUG of gerbs_core/mesh_surface.py (patch with the lead): kernels whose
+# 1 - F(t) underflows to 0 long before t = 1 leave holes in the cover and the surface
+# is silently NaN there instead of an InvalidParameterError("kernel"). Minimal
+# reproducer: BlendingSurface(*primitives.mixed_mesh(0.7),
+#     kernel=ERBS(gamma=7.389, lam=0.0, sigma=0.0)).tessellate(2) -> NaN points.
+# Re-include alpha, gamma up to 10 and beta up to 100 once that is fixed (then such
+# kernels must raise, which check_surface would have to accept).
 ERBS_BOX = dict(alpha=(0.1, 1.0), beta=(0.01, 10.0), gamma=(0.1, 1.0), sigma=(0.0, 10.0))
 
 
