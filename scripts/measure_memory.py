@@ -120,9 +120,9 @@ def main(argv=None) -> int:
     rows = []
     for stage in ("stencil", "tessellate"):
         for trace in ("0", "1"):
-            out = subprocess.run([sys.executable, __file__, "--points", str(args.points), "--mesh",
-                                  args.mesh, "--budget", str(args.budget), "--child", stage, trace], env=env, check=True,
-                                 capture_output=True, text=True).stdout
+            cmd = [sys.executable, __file__, "--points", str(args.points), "--mesh", args.mesh,
+                   "--budget", str(args.budget), "--child", stage, trace]
+            out = subprocess.run(cmd, env=env, check=True, capture_output=True, text=True).stdout
             rows.append(json.loads(out.strip().splitlines()[-1]))
     mb = lambda b: f"{b / 1e6:8.0f} MB"  # noqa: E731
     first = rows[0]
@@ -133,8 +133,8 @@ def main(argv=None) -> int:
         tm = next(r for r in rows if r["stage"] == stage and "tracemalloc_peak" in r)
         print(f"{stage:>10}: estimate {mb(rss['estimate'])} | tracemalloc peak "
               f"{mb(tm['tracemalloc_peak'])} (ratio estimate/peak "
-              f"{rss['estimate'] / tm['tracemalloc_peak']:.2f}) | RSS peak {mb(rss['rss_peak_total'])}"
-              f" total, {mb(rss['rss_peak_above_start'])} above the {mb(rss['rss_start'])} at start"
+              f"{rss['estimate'] / tm['tracemalloc_peak']:.2f}) | RSS peak "
+              f"{mb(rss['rss_peak_total'])} total, {mb(rss['rss_peak_above_start'])} above the {mb(rss['rss_start'])} at start"
               f" | {rss['seconds']:.1f} s, finite {rss['finite']}")
     return 0
 

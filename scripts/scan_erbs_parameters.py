@@ -77,8 +77,9 @@ def main() -> None:
                        for l_ in vals["lam"] for w in s)),
                key=lambda box: np.prod([len(r) for r in box]), default=None)
     if best:
+        names = ("alpha", "beta", "gamma", "sigma")
         print("largest all-ok box (every lam in [0, 1]): "
-              + ", ".join(f"{n} in [{r[0]}, {r[-1]}]" for n, r in zip(("alpha", "beta", "gamma", "sigma"), best)))
+              + ", ".join(f"{n} in [{r[0]}, {r[-1]}]" for n, r in zip(names, best)))
 
 
 if __name__ == "__main__":

@@ -259,7 +259,8 @@ def _log_scale(kern: ERBS) -> float:
     from scipy.optimize import minimize_scalar
 
     u = np.linspace(0.0, 1.0, 4097)[1:-1]
-    x = np.unique(np.concatenate([u, u ** 4, 1.0 - u ** 4, np.clip(kern.lam + (u - 0.5) ** 3, 1e-300, 1 - 1e-16)]))
+    near_lam = np.clip(kern.lam + (u - 0.5) ** 3, 1e-300, 1.0 - 1e-16)
+    x = np.unique(np.concatenate([u, u ** 4, 1.0 - u ** 4, near_lam]))
     x = x[(x > 0.0) & (x < 1.0)]
     with np.errstate(all="ignore"):
         E = kern.log_density_series(x, 0)[0]

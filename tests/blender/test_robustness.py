@@ -240,3 +240,25 @@ def test_undo_redo_across_add_and_remove_with_operators(blender):
     _undo(2)  # back to the start: nothing of ours left
     obj = bpy.data.objects[name]
     assert len(obj.modifiers) == 0 and np.array_equal(positions(obj.data), X)
+
+
+@pytest.mark.parametrize("settings,match", [
+    (dict(alpha=100.0), "cannot be tabulated"),  # untabulable ERBS: refused by the kernel
+    # outside the guaranteed box: 1 - F underflows, holes in the cover (known core bug:
+    # reported as a non-finite surface until BlendingSurface refuses such kernels)
+    (dict(gamma=7.389, lam=0.0, sigma=0.0), "not finite|holes in the cover"),
+])
+def test_extreme_kernel_parameters_are_an_error_not_a_crash(blender, settings, match):
+    from blender_addon import api
+    from blender_addon.api import GERBSSyncError
+
+    obj = make_object("icosphere")
+    snap = _snapshot(obj)
+    with pytest.raises(GERBSSyncError, match=match):
+        api.add_surface(obj, resolution=2, **settings)
+    assert np.array_equal(evaluated(obj), snap[0]) and _same_base(obj, snap)
+    ((kind, message),) = _warnings(obj)
+    assert kind == "ERROR"
+    api.set_settings(obj, alpha=1.0, gamma=1.0, lam=0.5, sigma=1.0)  # back in range: live again
+    P = evaluated(obj)
+    assert len(P) > len(snap[0]) and _warnings(obj) == []

@@ -52,7 +52,8 @@ def test_every_input_shape_agrees_with_the_1d_evaluation(kernel):
                 assert _same(kernel.bump(x, nu), ref_bump[nu, i])
     grid = np.linspace(-0.2, 1.2, 6).reshape(2, 3)
     d = kernel.cdf_derivs(grid, n)
-    assert d.shape == (n + 1, 2, 3) and _same(d.reshape(n + 1, -1), kernel.cdf_derivs(grid.ravel(), n))
+    assert d.shape == (n + 1, 2, 3)
+    assert _same(d.reshape(n + 1, -1), kernel.cdf_derivs(grid.ravel(), n))
     assert kernel.cdf(grid).shape == (2, 3) and kernel.bump_derivs(grid, n).shape == (n + 1, 2, 3)
     for empty in (np.zeros(0), np.zeros((2, 0))):
         assert kernel.cdf_derivs(empty, n).shape == (n + 1,) + empty.shape

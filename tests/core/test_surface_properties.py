@@ -31,7 +31,8 @@ from hypothesis import strategies as st
 from gerbs_core import BlendingSurface, primitives
 from gerbs_core.kernels import BFBS, ERBS, LogisticStep
 
-SETTINGS = dict(deadline=None, derandomize=True, database=None, phases=(Phase.explicit, Phase.reuse, Phase.generate, Phase.shrink),
+SETTINGS = dict(deadline=None, derandomize=True, database=None,
+                phases=(Phase.explicit, Phase.reuse, Phase.generate, Phase.shrink),  # no "explain"
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 N_SURFACE_CASES = 360
 N_KERNEL_CASES = 120
