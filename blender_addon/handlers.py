@@ -164,6 +164,10 @@ def register() -> None:
 
 
 def unregister() -> None:
+    global _shown
+    if _shown:  # our message must not outlive the add-on in the status bar
+        _status_text(None)
+    _shown = ()
     for name, func in _HANDLERS:
         lst = getattr(bpy.app.handlers, name)
         for old in [f for f in lst if getattr(f, "__name__", None) == func.__name__

@@ -45,6 +45,12 @@ def test_invalid_mesh_error_shows_in_panel_and_status_bar(blender):
     assert "non_manifold_edge" in api.status(obj)["error"]  # the GERBS status panel
     assert handlers.status_message is not None and "non_manifold_edge" in handlers.status_message
     assert obj.name in handlers.status_message
+    import blender_addon
+    blender_addon.unregister()  # the add-on's message leaves the status bar with it
+    assert handlers.status_message is None
+    blender_addon.register()
+    evaluated(obj)  # still invalid: shown again
+    assert "non_manifold_edge" in handlers.status_message
 
 
 def _add_fin(mesh):
