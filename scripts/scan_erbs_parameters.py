@@ -9,7 +9,7 @@ surface of the mixed mesh (all face sizes 3..6) at resolution 2 is finite with
 eps0 > 0; ``holes`` if that surface is not finite or eps0 = 0 (the kernel's
 1 - F(t) underflows long before t = 1); anything else is printed as a failure.
 Prints the counts and the largest sub-box (contiguous value ranges, all lam) in
-which every grid point is ``ok``. Takes ~6 min on 2 cores (``--quick``: ~1 min).
+which every grid point is ``ok``. Takes ~8 min on 2 cores (``--quick``: ~30 s).
 """
 from __future__ import annotations
 
