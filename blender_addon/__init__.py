@@ -78,6 +78,7 @@ def register() -> None:
         bpy.utils.register_class(cls)
     panels.register()
     handlers.register()
+    handlers.resync_all()  # catch up with edits made while unregistered
 
 
 def unregister() -> None:

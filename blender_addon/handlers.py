@@ -33,11 +33,24 @@ def _window_manager():
     return None if bpy.app.background else bpy.context.window_manager
 
 
+status_message = None  # what _status_text last put in the status bar (None: the default)
+
+
 def _status_text(message) -> None:
-    """Show an error in the status bar (UI only); None restores the default."""
-    workspace = None if bpy.app.background else getattr(bpy.context, "workspace", None)
+    """Show an error in the status bar; None restores the default.
+
+    Also in background mode (a window manager and workspace exist there too, the
+    text is simply not drawn), so scripts and tests see the same state as the UI
+    through ``status_message``.
+    """
+    global status_message
+    status_message = message
+    workspace = getattr(bpy.context, "workspace", None)
     if workspace is not None:
-        workspace.status_text_set(message)
+        try:
+            workspace.status_text_set(message)
+        except (AttributeError, RuntimeError, TypeError):  # no window (e.g. -b --factory-startup)
+            pass
 
 
 _shown: tuple = ()  # errors last shown (console, status bar): shown once, not per update
@@ -116,6 +129,16 @@ def on_undo_redo(scene, *args) -> None:
     _sync_objects(engine.gerbs_objects())
 
 
+def resync_all() -> None:
+    """Sync every GERBS object now (after register: edits made while the add-on was
+    off are picked up). A no-op while Blender restricts bpy.data (startup)."""
+    try:
+        objects = engine.gerbs_objects()
+    except AttributeError:  # bpy.data is _RestrictData during add-on registration at startup
+        return
+    _sync_objects(objects)
+
+
 @persistent
 def on_load(*args) -> None:
     engine.clear_caches()
@@ -141,6 +164,10 @@ def register() -> None:
 
 
 def unregister() -> None:
+    global _shown
+    if _shown:  # our message must not outlive the add-on in the status bar
+        _status_text(None)
+    _shown = ()
     for name, func in _HANDLERS:
         lst = getattr(bpy.app.handlers, name)
         for old in [f for f in lst if getattr(f, "__name__", None) == func.__name__

@@ -17,7 +17,7 @@ from .errors import InvalidParameterError
 from .obj_io import read_obj
 
 __all__ = ["icosphere", "uv_sphere", "grid", "mixed_mesh", "delaunay_patch", "jittered_patch", "suzanne",
-           "SUZANNE_PATH"]
+           "quad_patch", "ngon_ring", "fan", "SUZANNE_PATH"]
 
 SUZANNE_PATH = Path(__file__).resolve().parent.parent / "examples" / "suzanne.obj"
 
@@ -205,6 +205,87 @@ def jittered_patch(n_side: int, seed: int = 0, jitter: float = 0.35):
     h = 1.0 / (n - 1)
     xy[inner] += np.random.default_rng(seed).uniform(-jitter * h, jitter * h, (int(inner.sum()), 2))
     return delaunay_patch(points=xy)
+
+
+def quad_patch(n: int = 4, m: int | None = None, seed: int = 0, split: float = 0.3,
+               jitter: float = 0.2, holes: float = 0.0):
+    """Quad-dominant flat patch: an n x m grid of the unit square's width, jittered.
+
+    Interior vertices move by at most ``jitter * h`` per coordinate (h = 1/n; jitter
+    < 0.5 keeps every quad strictly convex); each cell is a quad or, with
+    probability ``split``, two triangles along a random diagonal; with probability
+    ``holes`` a cell at odd (i, j), 0 < i < n-1, 0 < j < m-1 is left out (such holes
+    never touch each other or the outer boundary, so the mesh stays manifold).
+    Faces are a list of tuples, counter-clockwise seen from +z.
+    """
+    n = _check_int("n", n, 1)
+    m = n if m is None else _check_int("m", m, 1)
+    if not 0.0 <= jitter < 0.5:
+        raise InvalidParameterError("jitter", f"must be in [0, 0.5), got {jitter}")
+    rng = np.random.default_rng(seed)
+    v, _ = grid(n, m)
+    h = 1.0 / n
+    i, j = np.arange(len(v)) % (n + 1), np.arange(len(v)) // (n + 1)
+    inner = (i > 0) & (i < n) & (j > 0) & (j < m)
+    v[inner, :2] += rng.uniform(-jitter * h, jitter * h, (int(inner.sum()), 2))
+    faces = []
+    for cj in range(m):
+        for ci in range(n):
+            if (ci % 2 and cj % 2 and 0 < ci < n - 1 and 0 < cj < m - 1
+                    and rng.random() < holes):
+                continue
+            a = cj * (n + 1) + ci
+            q = (a, a + 1, a + n + 2, a + n + 1)
+            if rng.random() < split:
+                faces += ([(q[0], q[1], q[2]), (q[0], q[2], q[3])] if rng.random() < 0.5
+                          else [(q[0], q[1], q[3]), (q[1], q[2], q[3])])
+            else:
+                faces.append(q)
+    used = np.unique(np.concatenate([np.asarray(f) for f in faces]))
+    remap = np.full(len(v), -1)
+    remap[used] = np.arange(len(used))  # holes never orphan a vertex; kept for safety
+    return v[used], [tuple(int(remap[k]) for k in f) for f in faces]
+
+
+def ngon_ring(n: int = 6, seed: int = 0, split: float = 0.5, twist: float = 0.2):
+    """A regular n-gon (n >= 3) surrounded by a ring of n quads, each split into two
+    triangles with probability ``split``; outer ring radius 2.5, rotated by ``twist``.
+
+    The n-gon's corners have valence 3 or 4; flat (z = 0), boundary = the outer ring.
+    """
+    n = _check_int("n", n, 3)
+    rng = np.random.default_rng(seed)
+    t = 2 * np.pi * np.arange(n) / n
+    inner = np.stack([np.cos(t), np.sin(t)], 1)
+    outer = 2.5 * np.stack([np.cos(t + twist), np.sin(t + twist)], 1)
+    v = np.concatenate([np.concatenate([inner, outer]), np.zeros((2 * n, 1))], 1)
+    faces = [tuple(range(n))]
+    for k in range(n):
+        q = ((k + 1) % n, k, n + k, n + (k + 1) % n)  # counter-clockwise from +z
+        if rng.random() < split:
+            faces += [(q[0], q[1], q[2]), (q[0], q[2], q[3])]
+        else:
+            faces.append(q)
+    return v, faces
+
+
+def fan(k: int = 6, height: float = 0.0, closed: bool = False):
+    """k triangles around a centre vertex 0 at (0, 0, height) (a cone; valence k).
+
+    Rim vertices 1..k on the unit circle in z = 0. ``closed``: add a second apex
+    (vertex k+1 at (0, 0, -height), or -1 if height = 0) with its own fan, a closed
+    bipyramid with two valence-k apices and valence-4 rim vertices (outward normals).
+    """
+    k = _check_int("k", k, 3)
+    t = 2 * np.pi * np.arange(k) / k
+    rim = np.stack([np.cos(t), np.sin(t), np.zeros(k)], 1)
+    top = [(0, 1 + i, 1 + (i + 1) % k) for i in range(k)]
+    if not closed:
+        return np.concatenate([[[0.0, 0.0, float(height)]], rim]), top
+    h = float(height) if height != 0.0 else 1.0
+    v = np.concatenate([[[0.0, 0.0, h]], rim, [[0.0, 0.0, -h]]])
+    bottom = [(k + 1, 1 + (i + 1) % k, 1 + i) for i in range(k)]
+    return v, top + bottom
 
 
 def suzanne():

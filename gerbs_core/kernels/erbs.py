@@ -82,13 +82,19 @@ class ERBS(Kernel):
     lam : float in [0, 1] (position of the density's maximum for sigma > 0)
     sigma : float >= 0
 
-    Raises InvalidParameterError naming the parameter when out of range.
-    ``max_order`` = 8. ``Z`` is the normalizing integral of eq. (2).
+    Raises InvalidParameterError naming the parameter when out of range, and
+    (at construction) when the parameter set cannot be tabulated in double
+    precision: the density is then concentrated on an interval too short to
+    resolve (F is numerically a step) -- see docs/robustness.md for the box
+    of parameters that is guaranteed to work.
+    ``max_order`` = 8. ``Z`` is the normalizing integral of eq. (2), of the
+    density scaled by exp(-max E) (``log_scale``): eq. (2)'s own Z underflows to
+    0 for e.g. sigma = 0, alpha = 8 (max E = -4^alpha beta), F does not change.
     """
 
     max_order = 8
 
-    def __init__(self, alpha=1.0, beta=1.0, gamma=1.0, lam=0.5, sigma=1.0):
+    def __init__(self, alpha=1.0, beta=1.0, gamma=1.0, lam=0.5, sigma=1.0, *, _check=True):
         alpha, beta, gamma = _real("alpha", alpha), _real("beta", beta), _real("gamma", gamma)
         lam, sigma = _real("lam", lam), _real("sigma", sigma)
         for name, v in (("alpha", alpha), ("beta", beta), ("gamma", gamma)):
@@ -109,6 +115,8 @@ class ERBS(Kernel):
         # E = beta - beta lam^2/t - beta (1-lam)^2/(1-t)  (partial fractions)
         s(self, "_rational", alpha == 1.0 and gamma == 1.0 and sigma == 1.0)
         s(self, "smoothness", self._smoothness())
+        if _check:
+            _tables(self)  # build (cached) and validate now: bad sets fail at construction
 
     def _params(self):
         return (self.alpha, self.beta, self.gamma, self.lam, self.sigma)
@@ -176,8 +184,13 @@ class ERBS(Kernel):
 
     @property
     def Z(self) -> float:
-        """The normalizing integral int_0^1 phi of eq. (2) (adaptive quadrature)."""
+        """The normalizing integral int_0^1 phi exp(-log_scale) (adaptive quadrature)."""
         return _tables(self)[0].Z
+
+    @property
+    def log_scale(self) -> float:
+        """max of E on a fine grid of (0, 1): the density is tabulated as exp(E - log_scale)."""
+        return _tables(self)[3]
 
     # -- evaluation -------------------------------------------------------
     def _eval_one(self, t, nu):
@@ -186,7 +199,7 @@ class ERBS(Kernel):
         return np.asarray(self._eval(t, nu)[nu])
 
     def _eval(self, t, nmax):
-        master, table, clip = _tables(self)
+        master, table, clip, shift = _tables(self)
         out = np.empty((nmax + 1,) + t.shape)
         if nmax == 0:
             table(t.reshape(-1), out=out.reshape(-1))      # (also right for 0-d t)
@@ -205,12 +218,14 @@ class ERBS(Kernel):
             table._chunk(tc, res[0, s:s + CHUNK])
             x = np.minimum(tc, clip[1])
             np.maximum(x, clip[0], out=x)
-            self._derivs_into(x, nmax, res[1:, s:s + CHUNK], inv_z)
+            self._derivs_into(x, nmax, res[1:, s:s + CHUNK], inv_z, shift)
         return out
 
-    def _derivs_into(self, x, nmax, dst, inv_z):
-        """dst[k-1] = F^(k)(x) = (k-1)! w_{k-1} / Z for k = 1..nmax (w = exp(E) series)."""
+    def _derivs_into(self, x, nmax, dst, inv_z, shift):
+        """dst[k-1] = F^(k)(x) = (k-1)! w_{k-1} / Z for k = 1..nmax (w = exp(E - shift)
+        series; the constant shift only rescales the density, Z is computed with it)."""
         E = self.log_density_series(x, nmax - 1)
+        E[0] = E[0] - shift
         w0 = np.exp(E[0], out=dst[0])
         w0 *= inv_z
         w = exp_series(E, w0)
@@ -218,16 +233,16 @@ class ERBS(Kernel):
             np.multiply(w[k - 1], float(math.factorial(k - 1)), out=dst[k - 1])
 
     def _interior(self, x, nmax):
-        master, table, _ = _tables(self)
+        master, table, _, shift = _tables(self)
         out = np.zeros((nmax + 1, x.size))
         out[0] = table(x)
         with np.errstate(all="ignore"):
-            E0 = self.log_density_series(x, 0)[0]
+            E0 = self.log_density_series(x, 0)[0] - shift
         live = E0 > _UNDERFLOW
         if live.any():
             sub = np.empty((nmax, int(live.sum())))
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                self._derivs_into(x[live], nmax, sub, 1.0 / master.Z)
+                self._derivs_into(x[live], nmax, sub, 1.0 / master.Z, shift)
             out[1:, live] = sub
         return out
 
@@ -236,27 +251,102 @@ def _tables(k: ERBS):
     return _build(k._params())
 
 
+def _log_scale(kern: ERBS) -> float:
+    """max E over (0, 1), located on a graded grid (dense near the ends and lam) and
+    polished by a bounded scalar search: exp(E - max E) <= ~1 never overflows and
+    does not underflow everywhere (which eq. (2) unscaled does, e.g. sigma = 0,
+    alpha = 8: E <= -4^8)."""
+    from scipy.optimize import minimize_scalar
+
+    u = np.linspace(0.0, 1.0, 4097)[1:-1]
+    near_lam = np.clip(kern.lam + (u - 0.5) ** 3, 1e-300, 1.0 - 1e-16)
+    x = np.unique(np.concatenate([u, u ** 4, 1.0 - u ** 4, near_lam]))
+    x = x[(x > 0.0) & (x < 1.0)]
+    with np.errstate(all="ignore"):
+        E = kern.log_density_series(x, 0)[0]
+    E = np.where(np.isnan(E), -np.inf, E)
+    k = int(np.argmax(E))
+    best = float(E[k])
+    if not np.isfinite(best):
+        return 0.0
+    a, b = x[max(k - 1, 0)], x[min(k + 1, len(x) - 1)]
+    if b > a:
+        f = lambda t: -float(kern.log_density_series(np.array([t]), 0)[0][0])  # noqa: E731
+        with np.errstate(all="ignore"):
+            r = minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": 1e-14})
+        if np.isfinite(r.fun):
+            best = max(best, -float(r.fun))
+    return best
+
+
+def _name_extreme(kern: ERBS) -> str:
+    """The parameter farthest from its default (log scale for alpha, beta, gamma, sigma)."""
+    d = {n: abs(math.log(v)) for n, v in (("alpha", kern.alpha), ("beta", kern.beta),
+                                           ("gamma", kern.gamma))}
+    d["sigma"] = abs(math.log(kern.sigma)) if kern.sigma > 0 else 0.0
+    d["lam"] = 2.0 * abs(kern.lam - 0.5)
+    return max(d, key=d.get)
+
+
+_MASTER_TOL = 1e-11      # accepted estimated quadrature error of the master, relative to Z
+_MASTER_CAP = 1e-7       # ... or up to the noise of exp(E - max E) (|max E| eps), but never more
+
+
+def _noise(shift: float) -> float:
+    """Relative rounding noise of exp(E - shift): E ~ shift is computed to ~|shift| eps."""
+    return 16.0 * np.finfo(float).eps * abs(shift)
+
+
+def _refuse(kern: ERBS, problem: str):
+    return InvalidParameterError(
+        _name_extreme(kern),
+        f"ERBS(alpha={kern.alpha}, beta={kern.beta}, gamma={kern.gamma}, lam={kern.lam}, "
+        f"sigma={kern.sigma}) cannot be tabulated: {problem}; F is numerically a step "
+        f"(see docs/robustness.md for the guaranteed parameter box)")
+
+
+def _tolerance(shift: float) -> float:
+    """Accepted relative error of Z and of the table: 1e-11, or the noise of
+    exp(E - shift) if larger, never more than 1e-7."""
+    return min(max(_MASTER_TOL, 4.0 * _noise(shift)), _MASTER_CAP)
+
+
 @lru_cache(maxsize=64)
 def _build(params):
-    """(master, fast table, clip interval or None) for one parameter set."""
-    kern = ERBS(*params)
+    """(master, fast table, clip interval or None, log scale) for one parameter set.
+
+    Raises InvalidParameterError (not cached) if the set cannot be tabulated."""
+    kern = ERBS(*params, _check=False)
     lam = kern.lam
+    shift = _log_scale(kern)
 
     def phi(x):
         with np.errstate(all="ignore"):
-            E0 = kern.log_density_series(x, 0)[0]
+            E0 = kern.log_density_series(x, 0)[0] - shift
             v = np.exp(E0)
         v[~np.isfinite(v)] = 0.0
         return v
 
-    master = ChebyshevMaster(phi, breaks=(lam,))
-    table = _fit_table(master, lam, kern.smoothness)
-    clip = _clip_interval(kern)
-    return master, table, clip
+    try:
+        master = ChebyshevMaster(phi, breaks=(lam,), noise=_noise(shift))
+    except RuntimeError:  # could not resolve the density within max_cells
+        raise _refuse(kern, "the density could not be resolved by adaptive quadrature") from None
+    tol = _tolerance(shift)
+    if not (np.isfinite(master.Z) and master.Z > 0.0):
+        raise _refuse(kern, f"the density integrates to {master.Z!r} in double precision")
+    if not master.tail_sum <= tol * master.Z:
+        raise _refuse(kern, f"the density is too concentrated to resolve (relative quadrature "
+                            f"error estimate {master.tail_sum / master.Z:.1e})")
+    table, table_err = _fit_table(master, lam, kern.smoothness)
+    if not table_err <= max(tol, 1e-12):
+        raise _refuse(kern, f"the value table misses the quadrature by {table_err:.1e}")
+    clip = _clip_interval(kern, shift)
+    return master, table, clip, shift
 
 
-def _fit_table(master: ChebyshevMaster, lam: float, smoothness) -> PiecewisePoly:
-    """The fast value table: uniform pieces if they reach _TABLE_TOL, else graded."""
+def _fit_table(master: ChebyshevMaster, lam: float, smoothness):
+    """(fast value table, its measured max error): uniform pieces if they reach
+    _TABLE_TOL, else graded."""
     offs = np.array([0.11, 0.29, 0.5, 0.71, 0.89])
 
     def err(breaks, coef):
@@ -268,8 +358,9 @@ def _fit_table(master: ChebyshevMaster, lam: float, smoothness) -> PiecewisePoly
     for M in (256, 512, 1024, 2048, 4096, 8192):
         breaks = np.linspace(0.0, 1.0, M + 1)
         coef = fit_pieces(master, breaks, _DEG)
-        if err(breaks, coef) <= _TABLE_TOL:
-            return PiecewisePoly(breaks, coef, uniform=True)
+        e = err(breaks, coef)
+        if e <= _TABLE_TOL:
+            return PiecewisePoly(breaks, coef, uniform=True), e
     # graded: split every master cell (graded towards lam and the ends)
     for parts in (4, 8, 16, 32, 64):
         breaks = np.unique(np.concatenate(
@@ -277,18 +368,19 @@ def _fit_table(master: ChebyshevMaster, lam: float, smoothness) -> PiecewisePoly
              ]).ravel())
         breaks = np.concatenate([breaks, [1.0]])
         coef = fit_pieces(master, breaks, _DEG)
-        if err(breaks, coef) <= _TABLE_TOL or parts == 64:
-            return PiecewisePoly(breaks, coef, uniform=False)
+        e = err(breaks, coef)
+        if e <= _TABLE_TOL or parts == 64:
+            return PiecewisePoly(breaks, coef, uniform=False), e
     raise AssertionError("unreachable")
 
 
-def _clip_interval(kern: ERBS):
-    """[lo, hi] outside which exp(E) == 0.0 and E's series stays finite, else None."""
+def _clip_interval(kern: ERBS, shift: float):
+    """[lo, hi] outside which exp(E - shift) == 0.0 and E's series stays finite, else None."""
     n = kern.max_order - 1
 
     def E0(x):
         with np.errstate(all="ignore"):
-            return float(kern.log_density_series(np.array([x]), 0)[0][0])
+            return float(kern.log_density_series(np.array([x]), 0)[0][0]) - shift
 
     def edge(inside, outside):
         # bisection between a point where phi > 0 and one where it underflows
