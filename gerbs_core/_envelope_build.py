@@ -325,10 +325,10 @@ def adaptive_scales(n_edges, ea, eb, nA, pA, nB, pB, roomA, roomB, kappa, kernel
     straight = tau <= 1e-12
     W = roomA + roomB
     al = roomA / W
-    G = overshoot_profile(kernel)
+    G, GB = overshoot_profile(kernel), overshoot_profile(kernel, mirrored=True)
     n = len(G) - 1
     gA = G[np.clip(np.ceil(al * n).astype(int), 0, n)]
-    gB = G[np.clip(np.ceil((1.0 - al) * n).astype(int), 0, n)]
+    gB = GB[np.clip(np.ceil((1.0 - al) * n).astype(int), 0, n)]
     eA = np.minimum(np.cos(-roomA - nA) ** 2, np.cos(nA) ** 2)
     eB = np.minimum(np.cos(roomB - nB) ** 2, np.cos(nB) ** 2)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -418,7 +418,8 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
     cB (1/max(c) - 1), reflex (r >= 1) cB (1/kappa - 1/min(c)). With the corner
     at alpha = a / (a + b) of a transition of width W = a + b, F(w)|x| <=
     W G(alpha) (:func:`overshoot_profile`), so W D_A(a) G(alpha) <= allowance_A
-    suffices; likewise on side B with G(1 - alpha). Each side is shrunk by
+    suffices; likewise on side B with G_B(1 - alpha) (the profile of the mirrored
+    kernel 1 - F(1 - w): F need not be symmetric, e.g. ERBS with lam != 1/2). Each side is shrunk by
     ``factor`` while its own condition fails (O(1) per corner and pass).
     Returns (a, b, ok)."""
     tau = np.abs(nB - nA)
@@ -426,7 +427,7 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
     convex = (nB - nA) > 0
     allowA = np.where(convex, cB * (1.0 / cmax - 1.0), cB * (1.0 / kappa - 1.0 / cmin))
     allowB = np.where(convex, cA * (1.0 / cmax - 1.0), cA * (1.0 / kappa - 1.0 / cmin))
-    G = overshoot_profile(kernel)
+    G, GB = overshoot_profile(kernel), overshoot_profile(kernel, mirrored=True)
     n = len(G) - 1
     st = np.sin(tau)
     same = (tau <= 1e-15) & (np.abs(pA - pB) <= 1e-15 * pA)
@@ -439,7 +440,7 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
         W = a[t] + b[t]
         al = a[t] / W
         gA = G[np.clip(np.ceil(al * n).astype(int), 0, n)]
-        gB = G[np.clip(np.ceil((1.0 - al) * n).astype(int), 0, n)]
+        gB = GB[np.clip(np.ceil((1.0 - al) * n).astype(int), 0, n)]
         eA = np.minimum(np.cos(-a[t] - nA[t]) ** 2, np.cos(nA[t]) ** 2)
         eB = np.minimum(np.cos(b[t] - nB[t]) ** 2, np.cos(nB[t]) ** 2)
         okA = W * (pA[t] / pB[t]) * st[t] * gA <= allowA[t] * eA * (1 - 1e-9)
@@ -469,15 +470,19 @@ def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, factor=_BLEND_
 _G_CACHE: dict = {}
 
 
-def overshoot_profile(kernel, n=513):
+def overshoot_profile(kernel, n=513, mirrored=False):
     """G(alpha) on the grid alpha = k/(n-1), an upper bound of
     max over w in [0, alpha] of F(w) (alpha - w): the worst weight times distance
-    on side A of a unit-width transition whose corner sits at w = alpha (side B:
-    G(1 - alpha), as F(1 - w) = 1 - F(w)). Between grid points
-    F(w)(alpha - w) <= F(w_hi)(alpha - w_lo) (F increasing): rigorous."""
+    on side A of a unit-width transition whose corner sits at w = alpha.
+    mirrored=True: the same for the mirrored kernel 1 - F(1 - w), i.e. side B
+    (weight 1 - F(w) at distance w - alpha), used as G_B(1 - alpha); equal to G
+    only for symmetric kernels (ERBS with lam = 1/2, LogisticStep). Between grid
+    points F(w)(alpha - w) <= F(w_hi)(alpha - w_lo) (F increasing): rigorous."""
     # keyed by the kernel's values (not its id: ids are reused after collection)
     w = np.linspace(0.0, 1.0, n)
     F = kernel.cdf_derivs(w, 0)[0]
+    if mirrored:  # grid symmetric: 1 - w_k = w_(n-1-k)
+        F = 1.0 - F[::-1]
     key = F.tobytes()
     G = _G_CACHE.get(key)
     if G is None:

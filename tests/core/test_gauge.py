@@ -398,11 +398,15 @@ def test_open_envelope_wider_than_2pi_endpoints_and_curvature():
     assert np.isfinite(G.g(np.array([0.3, 0.1])))
 
 
-def test_transition_width_certificates_hold_densely():
+@pytest.mark.parametrize("kern", [ERBS(), ERBS(lam=0.0), ERBS(lam=0.1), ERBS(lam=1.0),
+                                  ERBS(alpha=0.3, beta=3.0, lam=0.8)], ids=repr)
+def test_transition_width_certificates_hold_densely(kern):
     """The two certificates of a corner transition (the closed-form bound of
     closed_form_fit and the sampled bilinear bound of blend_check) both imply
     1 <= u~/u_exact <= 1/kappa (kappa rho <= rho~ <= rho): checked on 4001
-    points per transition for random corners, nearly radial edges included."""
+    points per transition for random corners, nearly radial edges included,
+    for symmetric and asymmetric kernels (lam != 1/2: F(1 - w) != 1 - F(w), so
+    side B needs the mirrored profile)."""
     from gerbs_core._envelope_build import blend_check, closed_form_fit, fit_blend_widths
     rng = np.random.default_rng(4)
     n = 400
@@ -419,7 +423,6 @@ def test_transition_width_certificates_hold_densely():
     # rooms inside each line's own range (cos(x - n) > 0)
     roomA = np.minimum(rng.uniform(0.05, 1.0, n), 0.99 * (np.pi / 2 - nA))
     roomB = np.minimum(rng.uniform(0.05, 1.0, n), 0.99 * (np.pi / 2 + nB))
-    kern = ERBS()
     cf = closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, KAPPA, kern, 0.85)
     fit = fit_blend_widths(nA, pA, cA, nB, pB, cB, roomA, roomB, KAPPA, kern)
     assert cf[2].all() and fit[2].all()
@@ -442,3 +445,22 @@ def test_transition_width_certificates_hold_densely():
     okA, okB, lo, hi = blend_check(nA, pA, cA, nB, pB, cB, roomA, roomB, KAPPA, kern)
     good = okA & okB
     assert good.any() and (~good).any()
+
+
+@pytest.mark.parametrize("lam", [0.0, 0.1, 0.5, 0.9, 1.0])
+def test_mesh_envelopes_stay_inside_the_star_for_asymmetric_kernels(lam):
+    """kappa shrink rho <= rho~ <= shrink rho densely on every star envelope of the
+    mixed mesh, for ERBS with any lam, so psi_w vanishes at the other vertices and
+    the surface interpolates (regression: the side-B width certificate once assumed
+    a symmetric kernel; ERBS(lam=1) then gave rho~/rho up to 1.26 and missed the
+    vertices by 0.27)."""
+    from gerbs_core import primitives as P
+    from gerbs_core.mesh_surface import BlendingSurface
+    V, F = P.mixed_mesh(0.7)
+    s = BlendingSurface(V, F, kernel=ERBS(lam=lam), degree=0)
+    for e in s._envelopes:
+        th = np.linspace(0.0, e.span, 20001)
+        q = np.asarray(e(th)).reshape(-1) / e.exact_radius(th)
+        assert q.max() <= e.shrink * (1 + 1e-12) and q.min() >= e.kappa * e.shrink * (1 - 1e-12)
+    P0 = s.tessellate(2)[0]
+    assert np.abs(P0[:len(V)] - V).max() <= 1e-12
