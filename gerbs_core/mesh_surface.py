@@ -231,6 +231,9 @@ class BlendingSurface:
     def _corner_terms_shared(self, n, faces, xt, memo=None):
         """:meth:`_corner_terms` (nu = 0) when every face of the block has the same
         reference polygon and samples xt (P, 2) (mode "regular", lattice template).
+        The monomials are returned shared, not gathered: a list over the corner slots
+        k of (table (D, M, P), inv (F,)) with mono_k of face f = table[inv[f]].T (the
+        form :func:`gerbs_core.stencil.assemble_csr` takes).
 
         Then r and the in-face angle depend only on the corner slot, psi only on
         (slot, envelope, sector start) and the monomials only on (slot, angle scale,
@@ -245,7 +248,7 @@ class BlendingSurface:
         M = self.fits.coef.shape[1]
         memo = {} if memo is None else memo
         psi = np.empty((n, F, P))
-        mono = np.empty((n, F, P, M))
+        mono = []  # per slot k: (table (D, M, P), inv (F,)), mono_k[f] = table[inv[f]].T
         for k in range(n):
             ck = corners[k]
             (r, th), = ch.polar(np.broadcast_to(ck[:1, None], (1, P)), xt[None], 0)
@@ -276,8 +279,11 @@ class BlendingSurface:
                     fn = first[new]
                     phi = s[fn][:, None] * (ch.theta0[ck[fn]][:, None] + a[None, :])
                     y = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
-                    memo.update(zip([tags[i] for i in new], monomials(y, self.degree, 0)[0]))
-                mono[k] = np.stack([memo[t] for t in tags])[inv.ravel()]
+                    # stored transposed (M, P): the layout the stencil assembly multiplies
+                    memo.update(zip([tags[i] for i in new],
+                                    np.ascontiguousarray(
+                                        monomials(y, self.degree, 0)[0].transpose(0, 2, 1))))
+                mono.append((np.stack([memo[t] for t in tags]), inv.ravel()))
         S0 = psi.sum(axis=0)
         return self.topology.face_vertices[corners], [psi / S0], [mono], psi.max(axis=0)
 
