@@ -105,7 +105,8 @@ class BlendingSurface:
                                     self.shapes.angles, topo.star_offsets, topo.star_corners,
                                     topo.vertex_is_boundary, boundary)
         self.fits = fit_local_functions(topo, self.charts, self.shapes.corners, degree,
-                                        max_condition=max_condition)
+                                        max_condition=max_condition,
+                                        flat=normals is not None)
         self.degree = self.fits.degree
         self._envelopes, self._corner_env, self._env_offset = build_envelopes(
             topo, self.charts, self.shapes.corners, kappa=kappa, shrink=shrink,
