@@ -310,9 +310,8 @@ class BlendingSurface:
         """Face-local coordinates of face f's lattice points in template order (the
         formulas of Lattice.map_to_polygon, for one face only)."""
         topo = self.topology
-        a, b = lat.local_offsets[f], lat.local_offsets[f + 1]
-        uv, fan = lat.local_uv[a:b], lat.local_fan[a:b]
         X = self.shapes.corners[topo.face_offsets[f]:topo.face_offsets[f + 1]]
+        uv, fan = lat.template_params(len(X))  # = lat.local_uv/local_fan of face f
         n = len(X)
         s, t = uv[:, :1], uv[:, 1:]
         if n == 3:

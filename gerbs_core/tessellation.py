@@ -27,7 +27,7 @@ lets callers (and tests) evaluate a shared sample from every incident face.
 """
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -202,8 +202,8 @@ class Lattice:
         owner_corner = tp.star_corners[tp.star_offsets[:-1]]
         first_he = tp.edge_halfedges[:, 0]
 
-        face_g, fan_g, uv_g = np.empty(P, dtype=np.int64), np.empty(P, dtype=np.int64), np.empty((P, 2))
-        parts = []  # (faces, G (nf, npt), template)
+        face_g = np.empty(P, dtype=np.int64)
+        parts = []  # (faces, G (nf, npt) samples, own (nf, npt) owned, face size)
         for n in np.unique(sizes).tolist():
             fk = np.flatnonzero(sizes == n)
             uv, fan, kind, loc, pos, canon, tris = _template(n, r)
@@ -224,33 +224,95 @@ class Lattice:
             c = kind == _INTERIOR
             G[:, c] = block[fk][:, None] + loc[c]
             own[:, c] = canon[c]
-            sel = G[own]
-            face_g[sel] = np.broadcast_to(fk[:, None], G.shape)[own]
-            fan_g[sel] = np.broadcast_to(fan, G.shape)[own]
-            uv_g[sel] = np.broadcast_to(uv, G.shape + (2,))[own]
-            parts.append((fk, G, uv, fan, tris))
-
-        lf = np.concatenate([np.repeat(fk, G.shape[1]) for fk, G, *_ in parts])
-        lorder = np.argsort(lf, kind="stable")
-        self.local_face = _ro(lf[lorder])
-        self.local_sample = _ro(np.concatenate([G.ravel() for _, G, *_ in parts])[lorder])
-        self.local_fan = _ro(np.concatenate([np.tile(fan, len(fk)) for fk, _, _, fan, _ in parts])[lorder])
-        self.local_uv = _ro(np.concatenate([np.tile(uv, (len(fk), 1)) for fk, _, uv, *_ in parts])[lorder])
+            face_g[G[own]] = np.broadcast_to(fk[:, None], G.shape)[own]
+            parts.append((fk, G, own, n))
+        # the per-class tables are merged into face order by offsets (each face is in
+        # exactly one class, in template order): scatters, no sort
+        npts = np.zeros(F, dtype=np.int64)
+        for fk, G, _, _ in parts:
+            npts[fk] = G.shape[1]
         loff = np.zeros(F + 1, dtype=np.int64)
-        np.cumsum(np.bincount(lf, minlength=F), out=loff[1:])
+        np.cumsum(npts, out=loff[1:])
+        toff = np.zeros(F + 1, dtype=np.int64)
+        np.cumsum(tcount, out=toff[1:])
+        local_sample = np.empty(int(loff[-1]), dtype=np.int64)
+        tri = np.empty((T, 3), dtype=np.int64)
+        tface = np.empty(T, dtype=np.int64)
+        for fk, G, own, n in parts:
+            tris = _template(n, r)[6]
+            npt, nt_ = G.shape[1], len(tris)
+            if len(parts) == 1:
+                local_sample[:] = G.ravel()
+                tri[:] = G[:, tris].reshape(-1, 3)
+                tface[:] = np.repeat(fk, nt_)
+            else:
+                local_sample[(loff[fk][:, None] + np.arange(npt)).ravel()] = G.ravel()
+                dest = (toff[fk][:, None] + np.arange(nt_)).ravel()
+                tri[dest] = G[:, tris].reshape(-1, 3)
+                tface[dest] = np.repeat(fk, nt_)
+        self._parts = parts
+        self.local_face = _ro(np.repeat(np.arange(F, dtype=np.int64), np.diff(loff)))
+        self.local_sample = _ro(local_sample)
         self.local_offsets = _ro(loff)
-
-        tri = np.concatenate([G[:, tris].reshape(-1, 3) for _, G, _, _, tris in parts])
-        tface = np.concatenate([np.repeat(fk, len(tris)) for fk, _, _, _, tris in parts])
-        torder = np.argsort(tface, kind="stable")
-        self.triangles = _ro(tri[torder])
-        self.triangle_face = _ro(tface[torder])
-        self.face, self.fan, self.uv = _ro(face_g), _ro(fan_g), _ro(uv_g)
+        self.triangles = _ro(tri)
+        self.triangle_face = _ro(tface)
+        self.face = _ro(face_g)
         self.vertex_sample = _ro(np.arange(V, dtype=np.int64))
         self.edge_samples = _ro(V + np.arange(E * (r - 1), dtype=np.int64).reshape(E, r - 1))
         self.topology, self.resolution = tp, r
         self.n_points, self.n_triangles = P, T
         assert len(self.triangles) == T and int(tcount.sum()) == T
+
+    # per-sample and local-table parameters are made on first use (the stencil of a
+    # mode "regular" surface needs neither)
+    @cached_property
+    def uv(self) -> np.ndarray:
+        self._params()
+        return self.__dict__["uv"]
+
+    @cached_property
+    def fan(self) -> np.ndarray:
+        self._params()
+        return self.__dict__["fan"]
+
+    def _params(self):
+        uv_g = np.empty((self.n_points, 2))
+        fan_g = np.empty(self.n_points, dtype=np.int64)
+        for fk, G, own, n in self._parts:
+            uv, fan = _template(n, self.resolution)[:2]
+            sel = G[own]
+            fan_g[sel] = np.broadcast_to(fan, G.shape)[own]
+            uv_g[sel] = np.broadcast_to(uv, G.shape + (2,))[own]
+        self.__dict__["uv"], self.__dict__["fan"] = _ro(uv_g), _ro(fan_g)
+
+    @cached_property
+    def local_uv(self) -> np.ndarray:
+        self._local_params()
+        return self.__dict__["local_uv"]
+
+    @cached_property
+    def local_fan(self) -> np.ndarray:
+        self._local_params()
+        return self.__dict__["local_fan"]
+
+    def _local_params(self):
+        L = len(self.local_face)
+        uv_l = np.empty((L, 2))
+        fan_l = np.empty(L, dtype=np.int64)
+        lo = self.local_offsets
+        for fk, G, own, n in self._parts:
+            uv, fan = _template(n, self.resolution)[:2]
+            dest = (lo[fk][:, None] + np.arange(G.shape[1])).ravel()
+            uv_l[dest] = np.tile(uv, (len(fk), 1))
+            fan_l[dest] = np.tile(fan, len(fk))
+        self.__dict__["local_uv"], self.__dict__["local_fan"] = _ro(uv_l), _ro(fan_l)
+
+    def template_params(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(uv (m, 2), fan (m,)) of every lattice point of an n-gon in template order: the
+        local table of any face with n corners (``local_uv/local_fan[local_offsets[f]:
+        local_offsets[f+1]]``), without building the whole table."""
+        uv, fan = _template(int(n), self.resolution)[:2]
+        return uv, fan
 
     def face_groups(self) -> tuple[np.ndarray, np.ndarray]:
         """(order (P,), offsets (F+1,)): ``order[offsets[f]:offsets[f+1]]`` are the samples
