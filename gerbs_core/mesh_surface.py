@@ -48,6 +48,20 @@ def _points(name, a, V=None):
     return x
 
 
+def _first_and_inverse(a: np.ndarray, b: np.ndarray):
+    """Distinct pairs (a_i, b_i): (first (D,) index of each one's first occurrence, in
+    order of appearance; inv (N,) the distinct pair of each i). A dict: for the few
+    hundred pairs of a block ~5x faster than np.unique(axis=0)."""
+    seen, first, inv = {}, [], []
+    for i, t in enumerate(zip(a.tolist(), b.tolist())):
+        j = seen.get(t)
+        if j is None:
+            j = seen[t] = len(first)
+            first.append(i)
+        inv.append(j)
+    return np.array(first, dtype=np.int64), np.array(inv, dtype=np.int64)
+
+
 class BlendingSurface:
     """GERBS blending surface of a polygon mesh (triangles, quads, n-gons; boundaries).
 
@@ -255,8 +269,7 @@ class BlendingSurface:
             (r, th), = ch.polar(np.broadcast_to(ck[:1, None], (1, P)), xt[None], 0)
             r, a = r[0], th[0] - ch.theta0[ck[0]]
             shift = np.round(ch.theta0[ck] - self._env_offset[ck], 11)
-            key = np.stack([self._corner_env[ck], shift], 1)
-            _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+            first, inv = _first_and_inverse(self._corner_env[ck], shift)
             rep = ck[first]  # tags: the exact inputs of the evaluation below
             tags = [("psi", n, P, k) + t for t in zip(self._corner_env[rep].tolist(),
                                                       ch.theta0[rep].tolist(),
@@ -268,11 +281,10 @@ class BlendingSurface:
                                     ch.theta0[rep][:, None] + a[None, :], 0)[0]
                 vals = 1.0 - self.kernel.cdf_derivs(r[None, :] * uu, 0)[0]
                 memo.update(zip([tags[i] for i in new], vals))
-            psi[k] = np.stack([memo[t] for t in tags])[inv.ravel()]
+            psi[k] = np.stack([memo[t] for t in tags])[inv]
             if M:
                 s = ch.scale[ch.corner_vertex[ck]]
-                key = np.stack([np.round(s, 12), np.round(ch.theta0[ck], 11)], 1)
-                _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+                first, inv = _first_and_inverse(np.round(s, 12), np.round(ch.theta0[ck], 11))
                 tags = [("mono", n, P, k) + t for t in zip(s[first].tolist(),
                                                            ch.theta0[ck[first]].tolist())]
                 new = [i for i, t in enumerate(tags) if t not in memo]
@@ -284,7 +296,7 @@ class BlendingSurface:
                     memo.update(zip([tags[i] for i in new],
                                     np.ascontiguousarray(
                                         monomials(y, self.degree, 0)[0].transpose(0, 2, 1))))
-                mono.append((np.stack([memo[t] for t in tags]), inv.ravel()))
+                mono.append((np.stack([memo[t] for t in tags]), inv))
         S0 = psi.sum(axis=0)
         return self.topology.face_vertices[corners], [psi / S0], [mono], psi.max(axis=0)
 
