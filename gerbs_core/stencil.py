@@ -111,6 +111,7 @@ def assemble_csr(blocks, ids, coef, n_points: int, n_vertices: int) -> sp.csr_ma
         cand = np.concatenate([u[:, :, None], ids[u]], axis=2)  # (n, F, 1+N)
         L, pos = _local_columns(np.transpose(cand, (1, 0, 2)).reshape(F, n * K))
         cnt = (L >= 0).sum(axis=1)  # valid local columns of each face: 0 .. cnt-1
+        L = L.astype(np.int32 if n_vertices < 2 ** 31 - 1 else np.int64)
         order = np.argsort(cnt, kind="stable")
         cs = cnt[order]
         cuts = np.flatnonzero(np.diff(cs)) + 1
