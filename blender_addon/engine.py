@@ -256,6 +256,7 @@ def _rebuild(obj, mod, res, settings, skey, X, offsets, corners, normals, progre
     st = SurfaceState(settings=skey, offsets=offsets, corners=corners, positions=X,
                       normals=normals, result_uid=res.session_uid)
     progress(0.05, "building surface")
+    lattice = None
     try:
         surface = BlendingSurface(
             X, mesh_io.faces_from_csr(offsets, corners), degree=settings["degree"],
@@ -265,7 +266,7 @@ def _rebuild(obj, mod, res, settings, skey, X, offsets, corners, normals, progre
             progress(0.35, "building stencil")
             stencil = surface.stencil(settings["resolution"])
             st.matrix = stencil.matrix.tocsr()
-            P, triangles = _product(st.matrix, X), stencil.triangles
+            P, triangles, lattice = _product(st.matrix, X), stencil.triangles, stencil.lattice
         else:  # Hermite normals: not W @ X (the core refuses a stencil); evaluate directly
             progress(0.35, "evaluating surface")
             P, triangles, _ = surface.tessellate(settings["resolution"])
@@ -283,11 +284,13 @@ def _rebuild(obj, mod, res, settings, skey, X, offsets, corners, normals, progre
     if (prev is not None and prev.triangles is not None and len(res.data.vertices) == len(P)
             and np.array_equal(prev.triangles, st.triangles)):
         mesh_io.write_positions(res.data, P)  # e.g. a new kernel: same output topology
-    else:
-        mesh_io.write_surface(res.data, P, st.triangles)
+    else:  # edges from the lattice structure where it has them (no hashing in Blender)
+        mesh_io.write_surface(res.data, P, st.triangles,
+                              edges=lattice.edges() if lattice is not None else None)
     _copy_materials(obj.data, res.data)
     if len(obj.data.materials) > 1:  # per-triangle material of the face it tessellates
-        tri_face = surface.lattice(settings["resolution"]).triangle_face
+        lattice = lattice or surface.lattice(settings["resolution"])
+        tri_face = lattice.triangle_face
         mesh_io.write_material_indices(res.data, mesh_io.read_material_indices(obj.data)[tri_face])
     st.n_points, st.n_triangles = len(P), len(st.triangles)
     st.build_seconds = time.perf_counter() - t0

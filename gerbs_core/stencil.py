@@ -33,11 +33,14 @@ __all__ = ["Stencil", "assemble_csr"]
 
 @dataclass(frozen=True)
 class Stencil:
-    """matrix: csr (P, V); triangles (T,3); vertex_samples (V,): output point of each vertex."""
+    """matrix: csr (P, V); triangles (T,3); vertex_samples (V,): output point of each
+    vertex; lattice: the :class:`gerbs_core.tessellation.Lattice` of the samples (its
+    ``triangle_face``, ``edges()``), or None."""
 
     matrix: sp.csr_matrix
     triangles: np.ndarray
     vertex_samples: np.ndarray
+    lattice: object = None
 
     def apply(self, X) -> np.ndarray:
         """Output points (P, 3) = W @ X for vertex positions X (V, 3) (any (V, k)).
