@@ -115,8 +115,9 @@ class LocalFits:
         return C + (C0n - Cn)[:, :, None] * n[:, None, :]
 
 
-def _to_chart(z: np.ndarray, theta_ref: np.ndarray, s: float) -> np.ndarray:
-    """Unfolded complex points z -> chart points, angle continuous about theta_ref."""
+def _to_chart(z: np.ndarray, theta_ref: np.ndarray, s) -> np.ndarray:
+    """Unfolded complex points z -> chart points, angle continuous about theta_ref.
+    Elementwise (theta_ref and the angle scale s broadcast against z)."""
     th = theta_ref + np.angle(z * np.exp(-1j * theta_ref))
     r = np.abs(z)
     return np.stack([r * np.cos(s * th), r * np.sin(s * th)], axis=-1)
@@ -204,17 +205,19 @@ def fit_local_functions(topo, charts, corners2d: np.ndarray, degree: int = 2,
     if todo:
         sc_l, so_l, cf_l = sc.tolist(), so.tolist(), corner_face.tolist()
         off_l, twin_l = off.tolist(), twin.tolist()
-        face_v = [a.tolist() for a in np.split(fv, off[1:-1])]
+        fv_l = fv.tolist()
+        face_v = [fv_l[a:b] for a, b in zip(off_l[:-1], off_l[1:])]
         state, stuck = {}, set()
         for v in todo:
             star = sc_l[so_l[v]:so_l[v + 1]]
             placed = {cf_l[c]: (zall[c, :sizes[cf_l[c]]], tref_all[c]) for c in star}
             state[v] = (placed, [cf_l[c] for c in star], set(ids_l[v]) | {v})
         while todo:
+            zs, trefs, svs, counts = [], [], [], []  # new points of this layer, all vertices
             for v in todo:
                 placed, frontier, seen = state[v]
                 ids, s = ids_l[v], charts.scale[v]
-                new_frontier, zs, trefs = [], [], []
+                new_frontier, n_before = [], len(zs)
                 # one more layer of faces across the outer edges of the placed faces
                 for f in frontier:
                     z, tref = placed[f]
@@ -243,10 +246,18 @@ def fit_local_functions(topo, charts, corners2d: np.ndarray, degree: int = 2,
                                 trefs.append(tref)
                 layers[v] += 1
                 state[v] = (placed, new_frontier, seen)
-                if zs:
-                    Ys[v] = np.concatenate([Ys[v], _to_chart(np.array(zs), np.array(trefs), s)])
+                svs.extend([s] * (len(zs) - n_before))
+                counts.append(len(zs) - n_before)
                 if not new_frontier:
                     stuck.add(v)  # nothing left to add: keep this fit
+            # chart positions of the layer's new points, one elementwise call for all
+            Yn = _to_chart(np.array(zs, dtype=complex), np.array(trefs, dtype=np.float64),
+                           np.array(svs, dtype=np.float64))
+            at = 0
+            for v, cnt in zip(todo, counts):
+                if cnt:
+                    Ys[v] = np.concatenate([Ys[v], Yn[at:at + cnt]])
+                    at += cnt
             fits = _fits_cached(cache, [Ys[v] for v in todo], [n0l[v] for v in todo],
                                 E, deg_of, flat)
             for v, f in zip(todo, fits):
@@ -299,6 +310,12 @@ def _weighted_fits(Y, n0, E, deg_of, flat=True):
     sw = hh[:, :, 0] / np.hypot(Y[..., 0], Y[..., 1])  # sqrt of the weights (h/|y|)^2
     B = np.prod((Y[:, :, None, :] / hh[..., None]) ** E[None, None, :, :], axis=-1) * sw[..., None]
     U, S, Vt = np.linalg.svd(B, full_matrices=False)
+    conds = np.where((N >= M) & (S[:, -1] > 0), S[:, 0] / np.where(S[:, -1] > 0, S[:, -1], 1.0),
+                     np.inf)
+    if not flat and np.all(S > RCOND * S[:, :1]):  # full rank: all solves in one batch
+        A = ((Vt.transpose(0, 2, 1) / S[:, None, :]) @ U.transpose(0, 2, 1)) \
+            * sw[:, None, :] / h[:, None, None] ** deg_of[None, :, None]
+        return [(c, a, None) for c, a in zip(conds.tolist(), A)]
     out = []
     for j in range(G):
         s = S[j]

@@ -127,46 +127,51 @@ def assemble_csr(blocks, ids, coef, n_points: int, n_vertices: int) -> sp.csr_ma
     indices = np.empty(nnz, dtype=np.int32 if n_vertices < 2 ** 31 - 1 else np.int64)
     lens = np.empty(n_rows, dtype=idx_dtype)
     owner = np.full(n_points, -1, dtype=idx_dtype)  # assembly row of each sample
-    # pass 2: rows = [Psi_k mono_k, Psi_k]_k @ C per face, one batched matmul per group
-    # of faces with equal column count c: l_{u_k} = X_u + mono . A (X_N - X_u) written
-    # in the face's local columns
+    # pass 2: rows = [Psi_k mono_k, Psi_k]_k @ C per face: l_{u_k} = X_u + mono . A
+    # (X_N - X_u) written in the face's local columns. The factors of a whole block
+    # are built at once, faces in order of c (numpy call overhead, not arithmetic,
+    # dominated per-group set-up); then one batched matmul per group of equal c
     row = at = 0
     for (faces, sel, u, Psi, mono), (L, pos, order, cs, bounds) in zip(blocks, prep):
         n, F, P = Psi.shape
         if M and not isinstance(mono, list):
             mono = [(mono[k].transpose(0, 2, 1), None) for k in range(n)]
+        PMt = np.empty((F, n * (M + 1), P))  # transposed: rows of P contiguous
+        for k in range(n):
+            Pk = Psi[k][order]
+            PMt[:, n * M + k] = Pk
+            if M:
+                tab, inv = mono[k]
+                np.multiply(tab[order if inv is None else inv[order]], Pk[:, None, :],
+                            out=PMt[:, k * M:(k + 1) * M])
+        # C (F, n(M+1), m): padding ids sit at column cnt_f (the face's first -1 in L)
+        # and only ever receive zeros (their coef is 0), so columns >= c_f are 0
+        gi = np.arange(F)
+        po = pos[order]
+        uo = u[:, order]
+        C = np.zeros((F, n * (M + 1), L.shape[1]))
+        for k in range(n):
+            pk = po[:, k * K:(k + 1) * K]  # local columns of [u_k, N_{u_k}]
+            C[gi, n * M + k, pk[:, 0]] = 1.0  # the constant X_u
+            if M:
+                A = coef[uo[k]]  # (F, M, N); padding columns are 0
+                rows = k * M + np.arange(M)
+                C[gi[:, None, None], rows[None, :, None], pk[:, None, 1:]] = A
+                C[gi[:, None], rows[None, :], pk[:, :1]] -= A.sum(axis=2)
+        Lo = L[order]
         for a, b in bounds:
             c = int(cs[a])
-            g = order[a:b]
             G = b - a
-            PMt = np.empty((G, n * (M + 1), P))  # transposed: rows of P contiguous
-            for k in range(n):
-                Pk = Psi[k][g]
-                PMt[:, n * M + k] = Pk
-                if M:
-                    tab, inv = mono[k]
-                    np.multiply(tab[g if inv is None else inv[g]], Pk[:, None, :],
-                                out=PMt[:, k * M:(k + 1) * M])
-            gi = np.arange(G)
-            posg = np.minimum(pos[g], c)  # padding ids -> one scratch column c
-            C = np.zeros((G, n * (M + 1), c + 1))
-            for k in range(n):
-                pk = posg[:, k * K:(k + 1) * K]  # local columns of [u_k, N_{u_k}]
-                C[gi, n * M + k, pk[:, 0]] = 1.0  # the constant X_u
-                if M:
-                    A = coef[u[k, g]]  # (G, M, N); padding columns are 0
-                    rows = k * M + np.arange(M)
-                    C[gi[:, None, None], rows[None, :, None], pk[:, None, 1:]] = A
-                    C[gi[:, None], rows[None, :], pk[:, :1]] -= A.sum(axis=2)
             m = G * P * c
-            np.matmul(PMt.transpose(0, 2, 1), C[:, :, :c], out=data[at:at + m].reshape(G, P, c))
-            indices[at:at + m].reshape(G, P, c)[...] = L[g, None, :c]
-            lens[row:row + G * P] = c
-            s = sel[g]
-            ok = s >= 0
-            owner[s[ok]] = (row + np.arange(G * P, dtype=idx_dtype)).reshape(G, P)[ok]
-            row += G * P
+            np.matmul(PMt[a:b].transpose(0, 2, 1), C[a:b, :, :c],
+                      out=data[at:at + m].reshape(G, P, c))
+            indices[at:at + m].reshape(G, P, c)[...] = Lo[a:b, None, :c]
             at += m
+        lens[row:row + F * P] = np.repeat(cs, P)
+        s = sel[order]
+        ok = s >= 0
+        owner[s[ok]] = (row + np.arange(F * P, dtype=idx_dtype)).reshape(F, P)[ok]
+        row += F * P
     if n_points and owner.min() < 0:
         raise AssertionError("assemble_csr: a sample has no owning face")
     indptr = np.zeros(n_rows + 1, dtype=idx_dtype)
