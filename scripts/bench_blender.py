@@ -13,7 +13,8 @@ and access to the evaluated mesh's positions:
           timed build (outside the timer), as for the first surface of a session;
           "warm G" keeps it (a rebuild after a settings change). One untimed
           build of each modifier first (imports, kernel tables, Blender's lazy
-          set-up), then the timed repeats.
+          set-up), then the timed repeats, interleaved (Subsurf, GERBS cold, GERBS
+          warm in every round) so both see the same machine load.
   1 vert  move one base vertex, evaluate
   all     move every base vertex, evaluate
 Targets (issue 5): GERBS update <= 0.5x Subsurf at ~120k vertices; build <= 4x
@@ -131,26 +132,34 @@ def bench_pair(bpy, obj, level, repeats):
 
     from gerbs_core.charts import clear_envelope_cache
 
-    def timed_builds(build, clear, cold):
-        times = []
-        for _ in range(max(3, repeats)):
-            clear()
-            if cold:
-                clear_envelope_cache()
-            t0 = time.perf_counter()
-            build()
-            times.append(time.perf_counter() - t0)
-        return statistics.median(times)
-
-    for name, build, clear in (("subsurf", sub_build, sub_clear), ("gerbs", gerbs_build, gerbs_clear)):
+    def timed(build, clear, cold=False):
         clear()
-        build()  # untimed warm-up
-        build_t = timed_builds(build, clear, cold=True)
-        warm_t = timed_builds(build, clear, cold=False) if name == "gerbs" else build_t
+        if cold:
+            clear_envelope_cache()
+        t0 = time.perf_counter()
+        build()
+        t = time.perf_counter() - t0
+        clear()
+        return t
+
+    # builds interleaved (S, G cold, G warm per round) so that both modifiers see the
+    # same machine load; one untimed build of each first
+    timed(sub_build, sub_clear)
+    timed(gerbs_build, gerbs_clear)
+    builds = {"subsurf": [], "gerbs": [], "gerbs warm": []}
+    for _ in range(max(3, repeats)):
+        builds["subsurf"].append(timed(sub_build, sub_clear))
+        builds["gerbs"].append(timed(gerbs_build, gerbs_clear, cold=True))
+        gerbs_build()  # fills the memo, untimed
+        builds["gerbs warm"].append(timed(gerbs_build, gerbs_clear))
+    for name, build, clear in (("subsurf", sub_build, sub_clear), ("gerbs", gerbs_build, gerbs_clear)):
+        build()
         evaluated_positions(bpy, obj)
         one = median_time(lambda: (mover.one(), evaluated_positions(bpy, obj)), repeats)
         allv = median_time(lambda: (mover.all(), evaluated_positions(bpy, obj)), repeats)
-        rows[name] = (build_t, warm_t, one, allv)
+        rows[name] = (statistics.median(builds[name]),
+                      statistics.median(builds["gerbs warm" if name == "gerbs" else name]),
+                      one, allv)
         clear()
     return n_sub, n_gerbs, r, rows
 
