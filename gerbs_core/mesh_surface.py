@@ -49,17 +49,12 @@ def _points(name, a, V=None):
 
 
 def _first_and_inverse(a: np.ndarray, b: np.ndarray):
-    """Distinct pairs (a_i, b_i): (first (D,) index of each one's first occurrence, in
-    order of appearance; inv (N,) the distinct pair of each i). A dict: for the few
-    hundred pairs of a block ~5x faster than np.unique(axis=0)."""
-    seen, first, inv = {}, [], []
-    for i, t in enumerate(zip(a.tolist(), b.tolist())):
-        j = seen.get(t)
-        if j is None:
-            j = seen[t] = len(first)
-            first.append(i)
-        inv.append(j)
-    return np.array(first, dtype=np.int64), np.array(inv, dtype=np.int64)
+    """Distinct pairs (a_i, b_i) of two float-valued arrays: (first (D,) index of each
+    one's first occurrence; inv (N,) the distinct pair of each i). One 1-D np.unique
+    on a + ib (lexicographic, stable: ~10x faster than np.unique(axis=0))."""
+    _, first, inv = np.unique(np.asarray(a, dtype=np.float64) + 1j * np.asarray(b, dtype=np.float64),
+                              return_index=True, return_inverse=True)
+    return first, inv.ravel()
 
 
 class BlendingSurface:
