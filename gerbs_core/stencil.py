@@ -18,8 +18,10 @@ samples of faces within face-distance 3 of w's star (star, blending: one more
 ring of faces).
 
 Assembly is vectorized: per face-size class the rows of a face are one dense
-block over the face's local columns L_f, written straight into CSR form (each
-sample belongs to exactly one face: no duplicate summation).
+block over the face's local columns L_f, computed by batched matmuls into an
+"assembly" CSR matrix whose rows are (face, lattice point) slots; W is its row
+selection of the owning slots (each sample belongs to exactly one face: no
+duplicate summation).
 """
 from __future__ import annotations
 
@@ -129,8 +131,8 @@ def assemble_csr(blocks, ids, coef, n_points: int, n_vertices: int) -> sp.csr_ma
     owner = np.full(n_points, -1, dtype=idx_dtype)  # assembly row of each sample
     # pass 2: rows = [Psi_k mono_k, Psi_k]_k @ C per face: l_{u_k} = X_u + mono . A
     # (X_N - X_u) written in the face's local columns. The factors of a whole block
-    # are built at once, faces in order of c (numpy call overhead, not arithmetic,
-    # dominated per-group set-up); then one batched matmul per group of equal c
+    # are built at once, faces in order of c, so each group's factors are views;
+    # then one batched matmul per group of equal c
     row = at = 0
     for (faces, sel, u, Psi, mono), (L, pos, order, cs, bounds) in zip(blocks, prep):
         n, F, P = Psi.shape
