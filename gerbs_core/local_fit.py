@@ -83,7 +83,8 @@ class LocalFits:
 
     ids (V, N) int, -1 = padding; coef (V, M, N): c_v = sum_j coef[v, :, j]
     (X[ids[v, j]] - X[v]); n_data (V,); layers (V,) extra face layers used;
-    cond (V,) condition number of the scaled weighted fit; degree.
+    cond (V,) condition number of the scaled weighted fit; degree; coef_flat (V, M, N)
+    the fit without linear terms (Hermite normals), None unless fitted with flat=True.
     """
 
     ids: np.ndarray
@@ -108,6 +109,9 @@ class LocalFits:
         C = np.einsum("vmn,vnk->vmk", self.coef, D)
         if normals is None or self.degree == 0:
             return C
+        if self.coef_flat is None:
+            raise InvalidParameterError("normals", "these fits were made with flat=False; "
+                                        "Hermite normals need fit_local_functions(..., flat=True)")
         n = np.asarray(normals, dtype=np.float64)
         C0 = np.einsum("vmn,vnk->vmk", self.coef_flat, D)  # linear rows are 0
         Cn = np.einsum("vmk,vk->vm", C, n)
