@@ -48,13 +48,20 @@ def _points(name, a, V=None):
     return x
 
 
-def _first_and_inverse(a: np.ndarray, b: np.ndarray):
-    """Distinct pairs (a_i, b_i) of two float-valued arrays: (first (D,) index of each
-    one's first occurrence; inv (N,) the distinct pair of each i). One 1-D np.unique
-    on a + ib (lexicographic, stable: ~10x faster than np.unique(axis=0))."""
-    z = np.asarray(a, dtype=np.float64) + 1j * np.asarray(b, dtype=np.float64)
-    _, first, inv = np.unique(z, return_index=True, return_inverse=True)
-    return first, inv.ravel()
+def _first_and_inverse(*keys):
+    """Distinct tuples of equally long key arrays (compared exactly): (first (D,) the
+    index of each distinct tuple's first occurrence; inv (N,) the distinct tuple of
+    each i). A stable lexsort (np.unique(axis=0) is ~10x slower for small blocks)."""
+    order = np.lexsort(keys[::-1])  # first key primary; stable: first occurrence first
+    same = np.ones(max(len(order) - 1, 0), dtype=bool)
+    for k in keys:
+        sk = np.asarray(k)[order]
+        same &= sk[1:] == sk[:-1]
+    new = np.ones(len(order), dtype=bool)
+    new[1:] = ~same
+    inv = np.empty(len(order), dtype=np.int64)
+    inv[order] = np.cumsum(new) - 1
+    return order[new], inv
 
 
 class BlendingSurface:
@@ -238,67 +245,80 @@ class BlendingSurface:
                             + np.einsum("...mi,...ijk->...mjk", mm[1], yy[2]))
         return u, Psi, mono, psi[0].max(axis=0)
 
-    def _corner_terms_shared(self, n, faces, xt, memo=None):
-        """:meth:`_corner_terms` (nu = 0) when every face of the block has the same
-        reference polygon and samples xt (P, 2) (mode "regular", lattice template).
-        The monomials are returned shared, not gathered: a list over the corner slots
-        k of (table (D, M, P), inv (F,)) with mono_k of face f = table[inv[f]].T (the
-        form :func:`gerbs_core.stencil.assemble_csr` takes).
+    def _shared_tables(self, n, faces, xt, parts=None):
+        """The distinct corner terms of faces that all have the same reference polygon
+        and samples xt (P, 2) (mode "regular", lattice template).
 
-        Then r and the in-face angle depend only on the corner slot, psi only on
+        Then r and the in-face angle depend only on the corner slot k, psi only on
         (slot, envelope, sector start) and the monomials only on (slot, angle scale,
-        sector start): each distinct combination is evaluated once and gathered.
-        memo: optional dict shared by the blocks of one stencil (same lattice), so
-        combinations recurring in later blocks of a face size are not re-evaluated.
+        sector start): each distinct combination is evaluated once, for all faces
+        of the size class in one envelope/kernel evaluation per slot. ``parts``
+        (slices of ``faces``, default one): the blocks the stencil is built in;
+        combinations are told apart per block, with the block's first face as the
+        reference of the in-face angle, as when each block was evaluated alone.
+        Returns (corners (n, F), [(psi table (D, P), inv (F,), mono table (D', M, P)
+        or None, inv' (F,)) per slot]).
         """
         ch = self.charts
         off = self.topology.face_offsets
         corners = off[faces][None, :] + np.arange(n)[:, None]  # (n, F)
-        F, P = len(faces), len(xt)
+        P = len(xt)
         M = self.fits.coef.shape[1]
-        memo = {} if memo is None else memo
-        psi = np.empty((n, F, P))
-        mono = []  # per slot k: (table (D, M, P), inv (F,)), mono_k[f] = table[inv[f]].T
+        parts = [slice(0, len(faces))] if parts is None else parts
+        bid = np.repeat(np.arange(len(parts)), [p.stop - p.start for p in parts])
+        starts = np.array([p.start for p in parts])
+        tabs = []
         for k in range(n):
             ck = corners[k]
-            (r, th), = ch.polar(np.broadcast_to(ck[:1, None], (1, P)), xt[None], 0)
-            r, a = r[0], th[0] - ch.theta0[ck[0]]
+            # r and in-face angle a of the template points, per block (its first face)
+            (r, th), = ch.polar(np.broadcast_to(ck[starts][:, None], (len(parts), P)),
+                                xt[None], 0)
+            a = th - ch.theta0[ck[starts]][:, None]
             shift = np.round(ch.theta0[ck] - self._env_offset[ck], 11)
-            first, inv = _first_and_inverse(self._corner_env[ck], shift)
-            rep = ck[first]  # tags: the exact inputs of the evaluation below
-            tags = [("psi", n, P, k) + t for t in zip(self._corner_env[rep].tolist(),
-                                                      ch.theta0[rep].tolist(),
-                                                      self._env_offset[rep].tolist())]
-            new = [i for i, t in enumerate(tags) if t not in memo]
-            if new:
-                rep = rep[new]
-                uu = eval_envelopes(self._envelopes, self._corner_env, self._env_offset, rep,
-                                    ch.theta0[rep][:, None] + a[None, :], 0)[0]
-                vals = 1.0 - self.kernel.cdf_derivs(r[None, :] * uu, 0)[0]
-                memo.update(zip([tags[i] for i in new], vals))
-            psi[k] = np.stack([memo[t] for t in tags])[inv]
+            first, inv = _first_and_inverse(bid, self._corner_env[ck], shift)
+            rep = ck[first]  # one representative corner per distinct combination
+            b = bid[first]
+            uu = eval_envelopes(self._envelopes, self._corner_env, self._env_offset, rep,
+                                ch.theta0[rep][:, None] + a[b], 0)[0]
+            psi_tab = 1.0 - self.kernel.cdf_derivs(r[b] * uu, 0)[0]
+            mono_tab = mono_inv = None
             if M:
                 s = ch.scale[ch.corner_vertex[ck]]
-                first, inv = _first_and_inverse(np.round(s, 12), np.round(ch.theta0[ck], 11))
-                tags = [("mono", n, P, k) + t for t in zip(s[first].tolist(),
-                                                           ch.theta0[ck[first]].tolist())]
-                new = [i for i, t in enumerate(tags) if t not in memo]
-                if new:
-                    fn = first[new]
-                    phi = s[fn][:, None] * (ch.theta0[ck[fn]][:, None] + a[None, :])
-                    y = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
-                    # stored transposed (M, P): the layout the stencil assembly multiplies
-                    memo.update(zip([tags[i] for i in new],
-                                    np.ascontiguousarray(
-                                        monomials(y, self.degree, 0)[0].transpose(0, 2, 1))))
-                mono.append((np.stack([memo[t] for t in tags]), inv))
+                fm, mono_inv = _first_and_inverse(bid, np.round(s, 12),
+                                                  np.round(ch.theta0[ck], 11))
+                b = bid[fm]
+                phi = s[fm][:, None] * (ch.theta0[ck[fm]][:, None] + a[b])
+                y = np.stack([r[b] * np.cos(phi), r[b] * np.sin(phi)], axis=-1)
+                # stored transposed (M, P): the layout the stencil assembly multiplies
+                mono_tab = np.ascontiguousarray(monomials(y, self.degree, 0)[0].transpose(0, 2, 1))
+            tabs.append((psi_tab, inv, mono_tab, mono_inv))
+        return corners, tabs
+
+    def _corner_terms_shared(self, n, faces, xt, tables=None, part=slice(None)):
+        """:meth:`_corner_terms` (nu = 0) from :meth:`_shared_tables`: ``tables`` made
+        for a superset of faces (default: for ``faces``), ``part`` the slice of it
+        that is ``faces``. The monomials are returned shared, not gathered: a list over
+        the corner slots k of (table (D, M, P), inv (F,)) with mono_k of face f =
+        table[inv[f]].T (the form :func:`gerbs_core.stencil.assemble_csr` takes).
+        """
+        corners, tabs = self._shared_tables(n, faces, xt) if tables is None else tables
+        corners = corners[:, part]
+        F, P = corners.shape[1], len(xt)
+        psi = np.empty((n, F, P))
+        mono = []  # per slot k: (table (D, M, P), inv (F,)), mono_k[f] = table[inv[f]].T
+        for k, (psi_tab, inv, mono_tab, mono_inv) in enumerate(tabs):
+            psi[k] = psi_tab[inv[part]]
+            if mono_tab is not None:
+                mono.append((mono_tab, mono_inv[part]))
         S0 = psi.sum(axis=0)
         return self.topology.face_vertices[corners], [psi / S0], [mono], psi.max(axis=0)
 
     def _template_blocks(self, lat):
-        """Yield (n, faces, sel, xt) per face size: all lattice points of each face in
-        template order (shared points once per face; sel = -1 where another face owns
-        the sample) -- for :meth:`_corner_terms_shared`."""
+        """Yield (n, faces, sel, xt, class_faces, part, per) per block of faces of one
+        size: all lattice points of each face in template order (shared points once
+        per face; sel = -1 where another face owns the sample), the block's slice
+        ``part`` of all faces of its size and the block length ``per`` -- for
+        :meth:`_shared_tables` / :meth:`_corner_terms_shared`."""
         topo = self.topology
         lo = lat.local_offsets
         for n in np.unique(topo.face_sizes).tolist():
@@ -311,7 +331,7 @@ class BlendingSurface:
                 idx = lo[faces][:, None] + np.arange(P)[None, :]
                 smp = lat.local_sample[idx]
                 sel = np.where(lat.face[smp] == faces[:, None], smp, -1)
-                yield n, faces, sel, xt
+                yield n, faces, sel, xt, fk, slice(a, a + len(faces)), per
 
     def _template_points(self, lat, f):
         """Face-local coordinates of face f's lattice points in template order (the
@@ -536,9 +556,16 @@ class BlendingSurface:
         eps = np.inf
         ids, coef = self.fits.ids, self.fits.coef
         if self.mode == "regular":  # identical reference polygons: shared template
-            memo = {}
-            groups = ((n, f, sel, xt, self._corner_terms_shared(n, f, xt, memo))
-                      for n, f, sel, xt in self._template_blocks(lat))
+            tables = {}  # per face size: the distinct corner terms of all its faces
+
+            def shared(n, f, xt, fk, part, per):
+                if n not in tables:
+                    tables[n] = self._shared_tables(
+                        n, fk, xt, [slice(a, min(a + per, len(fk))) for a in range(0, len(fk), per)])
+                return self._corner_terms_shared(n, f, xt, tables[n], part)
+
+            groups = ((n, f, sel, xt, shared(n, f, xt, fk, part, per))
+                      for n, f, sel, xt, fk, part, per in self._template_blocks(lat))
         else:
             x = lat.map_to_polygon(self.shapes.corners)
             groups = ((n, f, sel, xb, self._corner_terms(n, f, xb, 0))
