@@ -575,4 +575,4 @@ class BlendingSurface:
             blocks.append((faces, sel, u, Psi[0], mono[0]))
         self._last_eps0 = eps
         W = assemble_csr(blocks, ids, coef, lat.n_points, self.topology.n_vertices)
-        return Stencil(W, np.array(lat.triangles), np.array(lat.vertex_sample), lat)
+        return Stencil(W, lat.triangles, lat.vertex_sample, lat)  # read-only, not copied

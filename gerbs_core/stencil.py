@@ -35,7 +35,8 @@ __all__ = ["Stencil", "assemble_csr"]
 
 @dataclass(frozen=True)
 class Stencil:
-    """matrix: csr (P, V); triangles (T,3); vertex_samples (V,): output point of each
+    """matrix: csr (P, V); triangles (T,3), vertex_samples (V,) (read-only, shared with
+    the lattice): output triangles and the output point of each
     vertex; lattice: the :class:`gerbs_core.tessellation.Lattice` of the samples (its
     ``triangle_face``, ``edges()``), or None."""
 

@@ -284,31 +284,37 @@ class Lattice:
         np.cumsum(tcount, out=toff[1:])
         local_sample = np.empty(int(loff[-1]), dtype=np.int64)
         tri = np.empty((T, 3), dtype=np.int64)
-        tface = np.empty(T, dtype=np.int64)
         for fk, G, own, n in parts:
             tris = _template(n, r)[6]
             npt, nt_ = G.shape[1], len(tris)
             if len(parts) == 1:
                 local_sample[:] = G.ravel()
                 tri[:] = G[:, tris].reshape(-1, 3)
-                tface[:] = np.repeat(fk, nt_)
             else:
                 local_sample[(loff[fk][:, None] + np.arange(npt)).ravel()] = G.ravel()
                 dest = (toff[fk][:, None] + np.arange(nt_)).ravel()
                 _scatter_rows(tri, dest, G[:, tris].reshape(-1, 3))
-                tface[dest] = np.repeat(fk, nt_)
         self._parts = parts
-        self.local_face = _ro(np.repeat(np.arange(F, dtype=np.int64), np.diff(loff)))
         self.local_sample = _ro(local_sample)
         self.local_offsets = _ro(loff)
         self.triangles = _ro(tri)
-        self.triangle_face = _ro(tface)
+        self._tcount = tcount
         self.face = _ro(face_g)
         self.vertex_sample = _ro(np.arange(V, dtype=np.int64))
         self.edge_samples = _ro(V + np.arange(E * (r - 1), dtype=np.int64).reshape(E, r - 1))
         self.topology, self.resolution = tp, r
         self.n_points, self.n_triangles = P, T
         assert len(self.triangles) == T and int(tcount.sum()) == T
+
+    # faces in face order: made on first use from the counts
+    @cached_property
+    def triangle_face(self) -> np.ndarray:
+        return _ro(np.repeat(np.arange(self.topology.n_faces, dtype=np.int64), self._tcount))
+
+    @cached_property
+    def local_face(self) -> np.ndarray:
+        return _ro(np.repeat(np.arange(self.topology.n_faces, dtype=np.int64),
+                             np.diff(self.local_offsets)))
 
     # per-sample and local-table parameters are made on first use (the stencil of a
     # mode "regular" surface needs neither)
