@@ -254,8 +254,11 @@ class BlendingSurface:
         sector start): each distinct combination is evaluated once, for all faces
         of the size class in one envelope/kernel evaluation per slot. ``parts``
         (slices of ``faces``, default one): the blocks the stencil is built in;
-        combinations are told apart per block, with the block's first face as the
-        reference of the in-face angle, as when each block was evaluated alone.
+        combinations (rounded) are told apart per block, represented by their first
+        corner in the block, and representatives with equal exact inputs share the
+        evaluation of the first block having them (the block's first face is the
+        reference of the in-face angle) -- the values a per-block evaluation with a
+        memo of exact inputs gives.
         Returns (corners (n, F), [(psi table (D, P), inv (F,), mono table (D', M, P)
         or None, inv' (F,)) per slot]).
         """
@@ -277,7 +280,11 @@ class BlendingSurface:
             shift = np.round(ch.theta0[ck] - self._env_offset[ck], 11)
             first, inv = _first_and_inverse(bid, self._corner_env[ck], shift)
             rep = ck[first]  # one representative corner per distinct combination
-            b = bid[first]
+            # the exact inputs of the representatives: equal ones (from different
+            # blocks) are evaluated once, in the first block that has them
+            f2, inv2 = _first_and_inverse(self._corner_env[rep], ch.theta0[rep],
+                                          self._env_offset[rep])
+            rep, b, inv = rep[f2], bid[first[f2]], inv2[inv]
             uu = eval_envelopes(self._envelopes, self._corner_env, self._env_offset, rep,
                                 ch.theta0[rep][:, None] + a[b], 0)[0]
             psi_tab = 1.0 - self.kernel.cdf_derivs(r[b] * uu, 0)[0]
@@ -286,6 +293,8 @@ class BlendingSurface:
                 s = ch.scale[ch.corner_vertex[ck]]
                 fm, mono_inv = _first_and_inverse(bid, np.round(s, 12),
                                                   np.round(ch.theta0[ck], 11))
+                f2, inv2 = _first_and_inverse(s[fm], ch.theta0[ck[fm]])
+                fm, mono_inv = fm[f2], inv2[mono_inv]
                 b = bid[fm]
                 phi = s[fm][:, None] * (ch.theta0[ck[fm]][:, None] + a[b])
                 y = np.stack([r[b] * np.cos(phi), r[b] * np.sin(phi)], axis=-1)
