@@ -105,8 +105,16 @@ def write_material_indices(mesh, indices: np.ndarray) -> None:
     mesh.update()
 
 
-def write_surface(mesh, points: np.ndarray, triangles: np.ndarray) -> None:
-    """Replace the mesh's geometry by a triangle mesh (points (P,3), triangles (T,3))."""
+def write_surface(mesh, points: np.ndarray, triangles: np.ndarray, edges=None) -> None:
+    """Replace the mesh's geometry by a triangle mesh (points (P,3), triangles (T,3)).
+
+    edges: optional (edge_verts (E, 2), corner_edges (T, 3)) of exactly these
+    triangles (every undirected edge once; corner_edges[t, i] = edge from corner i
+    to corner i+1), e.g. :meth:`gerbs_core.tessellation.Lattice.edges`: written as
+    the raw ``.edge_verts`` / ``.corner_edge`` attributes instead of letting
+    Blender hash all 3T half-edges (``update(calc_edges=True)``: measured 14-23 ms
+    for 248k triangles, against ~1.5 ms for the two attribute writes).
+    """
     n_points, n_tris = len(points), len(triangles)
     mesh.clear_geometry()
     mesh.vertices.add(n_points)
@@ -121,7 +129,16 @@ def write_surface(mesh, points: np.ndarray, triangles: np.ndarray) -> None:
         attr.data.foreach_set("value", corner_verts)
     else:
         mesh.loops.foreach_set("vertex_index", corner_verts)
-    mesh.update(calc_edges=True)
+    edge_attr = mesh.attributes.get(".corner_edge")
+    if edges is not None and attr is not None and edge_attr is not None:
+        edge_verts, corner_edges = edges
+        mesh.edges.add(len(edge_verts))
+        mesh.attributes[".edge_verts"].data.foreach_set(
+            "value", np.ascontiguousarray(edge_verts, dtype=np.int32).ravel())
+        edge_attr.data.foreach_set("value", np.ascontiguousarray(corner_edges, dtype=np.int32).ravel())
+        mesh.update()
+    else:
+        mesh.update(calc_edges=True)
     mesh.shade_smooth()
 
 

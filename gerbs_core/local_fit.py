@@ -83,7 +83,8 @@ class LocalFits:
 
     ids (V, N) int, -1 = padding; coef (V, M, N): c_v = sum_j coef[v, :, j]
     (X[ids[v, j]] - X[v]); n_data (V,); layers (V,) extra face layers used;
-    cond (V,) condition number of the scaled weighted fit; degree.
+    cond (V,) condition number of the scaled weighted fit; degree; coef_flat (V, M, N)
+    the fit without linear terms (Hermite normals), None unless fitted with flat=True.
     """
 
     ids: np.ndarray
@@ -108,6 +109,9 @@ class LocalFits:
         C = np.einsum("vmn,vnk->vmk", self.coef, D)
         if normals is None or self.degree == 0:
             return C
+        if self.coef_flat is None:
+            raise InvalidParameterError("normals", "these fits were made with flat=False; "
+                                        "Hermite normals need fit_local_functions(..., flat=True)")
         n = np.asarray(normals, dtype=np.float64)
         C0 = np.einsum("vmn,vnk->vmk", self.coef_flat, D)  # linear rows are 0
         Cn = np.einsum("vmk,vk->vm", C, n)
@@ -115,20 +119,28 @@ class LocalFits:
         return C + (C0n - Cn)[:, :, None] * n[:, None, :]
 
 
-def _to_chart(z: np.ndarray, theta_ref: np.ndarray, s: float) -> np.ndarray:
-    """Unfolded complex points z -> chart points, angle continuous about theta_ref."""
+def _to_chart(z: np.ndarray, theta_ref: np.ndarray, s) -> np.ndarray:
+    """Unfolded complex points z -> chart points, angle continuous about theta_ref.
+    Elementwise (theta_ref and the angle scale s broadcast against z)."""
     th = theta_ref + np.angle(z * np.exp(-1j * theta_ref))
     r = np.abs(z)
     return np.stack([r * np.cos(s * th), r * np.sin(s * th)], axis=-1)
 
 
 def fit_local_functions(topo, charts, corners2d: np.ndarray, degree: int = 2,
-                        max_condition: float = 100.0, max_layers: int = 2) -> LocalFits:
+                        max_condition: float = 100.0, max_layers: int = 2,
+                        flat: bool = True) -> LocalFits:
     """Fit l_v for every vertex (see the module docstring). Exact linear algebra via SVD.
 
     topo: a MeshTopology-like object with face_offsets, face_vertices,
     star_offsets, star_corners, halfedge_twin (C,) (opposite half-edge or -1).
-    charts: :class:`gerbs_core.charts.VertexCharts`.
+    charts: :class:`gerbs_core.charts.VertexCharts`. flat: also compute
+    ``coef_flat`` (needed only for Hermite normals; else it is None).
+
+    Vectorized: the first data layer of all vertices is collected at once, equal
+    layouts share one solve (exact dict on the rounded layout), and the solves of
+    equally sized layouts run as one batched SVD; only the vertices needing
+    enlargement take the per-face unfolding loop.
     """
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) \
             or not 0 <= degree <= 3:
@@ -162,110 +174,164 @@ def fit_local_functions(topo, charts, corners2d: np.ndarray, degree: int = 2,
         yall[cs_n, :n] = np.stack([r * np.cos(s_c * th), r * np.sin(s_c * th)], axis=-1)
     tref_all = charts.theta0 + 0.5 * charts.alpha
     min_data = max(7, M + 2)
-    cache = {}  # equal data layouts (e.g. mode regular) share one solve
     deg_of = E.sum(axis=1)
-    results = []
-    # plain Python lists for the per-vertex loop (numpy scalars are slow here)
-    sc_l, so_l, cf_l = sc.tolist(), so.tolist(), corner_face.tolist()
-    off_l, twin_l = off.tolist(), twin.tolist()
-    face_v = np.split(fv, off[1:-1])
-    face_v = [a.tolist() for a in face_v]
-    for v in range(V):
-        s = charts.scale[v]
-        placed = {}  # face -> (complex positions of its corners (n,), theta_ref)
-        ids, yc, yi = [], [], []
-        seen = {v}
-        frontier = []
-        for c in sc_l[so_l[v]:so_l[v + 1]]:
-            f = cf_l[c]
-            placed[f] = c  # (positions, theta_ref) made on demand from zall, tref_all
-            frontier.append(f)
-            for i, qv in enumerate(face_v[f]):
-                if qv not in seen:
-                    seen.add(qv)
-                    ids.append(qv)
-                    yc.append(c)
-                    yi.append(i)
-        n0 = len(ids)
-        Y = yall[yc, yi].reshape(-1, 2)
-        ys = None
-        layers = 0
-        while True:
-            key = (n0, np.round(Y, 12).tobytes())
-            fit = cache.get(key)
-            if fit is None:
-                fit = cache[key] = _weighted_fit(Y, n0, E, deg_of)
-            cond = fit[0]
-            if (len(Y) >= min_data and cond <= max_condition) or layers >= max_layers:
-                break
-            if ys is None:
-                ys = list(Y)
-                placed = {f: (zall[c, :sizes[f]], tref_all[c]) for f, c in placed.items()}
-            # one more layer of faces across the outer edges of the placed faces
-            new_frontier = []
-            for f in frontier:
-                z, tref = placed[f]
-                for k, q in enumerate(range(off_l[f], off_l[f + 1])):
-                    t = twin_l[q]
-                    if t < 0:
-                        continue
-                    g = cf_l[t]
-                    if g in placed:
-                        continue
-                    # corner t of g sits at vertex of next(q), next(t) at vertex of q
-                    za = z[(k + 1) % len(z)]
-                    zb = z[k]
-                    gs = np.arange(off_l[g], off_l[g + 1])
-                    nt = off_l[g] + (t - off_l[g] + 1) % len(gs)
-                    rot = (zb - za) / (zc[nt] - zc[t])
-                    rot /= abs(rot)
-                    zg = za + (zc[gs] - zc[t]) * rot
-                    placed[g] = (zg, tref)
-                    new_frontier.append(g)
-                    yy = _to_chart(zg, tref, s)
-                    for i, qv in enumerate(face_v[g]):
-                        if qv not in seen:
-                            seen.add(qv)
-                            ids.append(qv)
-                            ys.append(yy[i])
-            layers += 1
-            frontier = new_frontier
-            Y = np.array(ys).reshape(-1, 2)
-            if not new_frontier:
-                break
-        cond, A, A0 = fit
-        results.append((np.array(ids, dtype=np.int64), A, layers, cond, A0))
-    N = max(max(len(r[0]) for r in results), 1)
+
+    # first layer, all vertices at once: the corners of the star faces in star order,
+    # each vertex once (first occurrence), v itself excluded
+    star_v = np.repeat(np.arange(V), np.diff(so))
+    ec = np.repeat(sc, sizes[corner_face[sc]])  # star corner of every entry
+    ev = np.repeat(star_v, sizes[corner_face[sc]])
+    start = np.repeat(off[corner_face[sc]], sizes[corner_face[sc]])
+    ei = np.arange(len(ec)) - np.repeat(np.cumsum(sizes[corner_face[sc]])
+                                        - sizes[corner_face[sc]], sizes[corner_face[sc]])
+    eq = fv[start + ei]
+    _, first = np.unique(ev * V + eq, return_index=True)  # first occurrence per (v, q)
+    first = np.sort(first)
+    first = first[eq[first] != ev[first]]
+    ids0 = eq[first]
+    n0 = np.bincount(ev[first], minlength=V)
+    o0 = np.zeros(V + 1, dtype=np.int64)
+    np.cumsum(n0, out=o0[1:])
+    Y0 = yall[ec[first], ei[first]]
+
+    cache = {}  # equal data layouts (e.g. mode regular) share one solve
+    Ys = [Y0[o0[v]:o0[v + 1]] for v in range(V)]
+    n0l = n0.tolist()
+    fit = _fits_cached(cache, Ys, n0l, E, deg_of, flat)
+    ids_l = [ids0[o0[v]:o0[v + 1]].tolist() for v in range(V)]
+    layers = [0] * V
+
+    def ok(v):
+        return ((len(Ys[v]) >= min_data and fit[v][0] <= max_condition)
+                or layers[v] >= max_layers)
+
+    todo = [v for v in range(V) if not ok(v)]
+    if todo:
+        sc_l, so_l, cf_l = sc.tolist(), so.tolist(), corner_face.tolist()
+        off_l, twin_l = off.tolist(), twin.tolist()
+        fv_l = fv.tolist()
+        face_v = [fv_l[a:b] for a, b in zip(off_l[:-1], off_l[1:])]
+        state, stuck = {}, set()
+        for v in todo:
+            star = sc_l[so_l[v]:so_l[v + 1]]
+            placed = {cf_l[c]: (zall[c, :sizes[cf_l[c]]], tref_all[c]) for c in star}
+            state[v] = (placed, [cf_l[c] for c in star], set(ids_l[v]) | {v})
+        while todo:
+            zs, trefs, svs, counts = [], [], [], []  # new points of this layer, all vertices
+            for v in todo:
+                placed, frontier, seen = state[v]
+                ids, s = ids_l[v], charts.scale[v]
+                new_frontier, n_before = [], len(zs)
+                # one more layer of faces across the outer edges of the placed faces
+                for f in frontier:
+                    z, tref = placed[f]
+                    for k, q in enumerate(range(off_l[f], off_l[f + 1])):
+                        t = twin_l[q]
+                        if t < 0:
+                            continue
+                        g = cf_l[t]
+                        if g in placed:
+                            continue
+                        # corner t of g sits at vertex of next(q), next(t) at vertex of q
+                        za = z[(k + 1) % len(z)]
+                        zb = z[k]
+                        gs = np.arange(off_l[g], off_l[g + 1])
+                        nt = off_l[g] + (t - off_l[g] + 1) % len(gs)
+                        rot = (zb - za) / (zc[nt] - zc[t])
+                        rot /= abs(rot)
+                        zg = za + (zc[gs] - zc[t]) * rot
+                        placed[g] = (zg, tref)
+                        new_frontier.append(g)
+                        for i, qv in enumerate(face_v[g]):
+                            if qv not in seen:
+                                seen.add(qv)
+                                ids.append(qv)
+                                zs.append(zg[i])
+                                trefs.append(tref)
+                layers[v] += 1
+                state[v] = (placed, new_frontier, seen)
+                svs.extend([s] * (len(zs) - n_before))
+                counts.append(len(zs) - n_before)
+                if not new_frontier:
+                    stuck.add(v)  # nothing left to add: keep this fit
+            # chart positions of the layer's new points, one elementwise call for all
+            Yn = _to_chart(np.array(zs, dtype=complex), np.array(trefs, dtype=np.float64),
+                           np.array(svs, dtype=np.float64))
+            at = 0
+            for v, cnt in zip(todo, counts):
+                if cnt:
+                    Ys[v] = np.concatenate([Ys[v], Yn[at:at + cnt]])
+                    at += cnt
+            fits = _fits_cached(cache, [Ys[v] for v in todo], [n0l[v] for v in todo],
+                                E, deg_of, flat)
+            for v, f in zip(todo, fits):
+                fit[v] = f
+            todo = [v for v in todo if not ok(v) and v not in stuck]
+    N = max(max(len(i) for i in ids_l), 1)
     ids = np.full((V, N), -1, dtype=np.int64)
     coef = np.zeros((V, M, N))
-    coef0 = np.zeros((V, M, N))
-    n_data = np.zeros(V, dtype=np.int64)
-    lay = np.zeros(V, dtype=np.int64)
-    cnd = np.zeros(V)
-    for v, (i, A, l, c, A0) in enumerate(results):
+    coef0 = np.zeros((V, M, N)) if flat else None
+    n_data = np.array([len(i) for i in ids_l], dtype=np.int64)
+    cnd = np.array([f[0] for f in fit], dtype=np.float64)
+    for v in range(V):
+        i = ids_l[v]
         ids[v, :len(i)] = i
-        coef[v, :, :len(i)] = A
-        coef0[v, :, :len(i)] = A0
-        n_data[v], lay[v], cnd[v] = len(i), l, c
-    return LocalFits(ids, coef, n_data, lay, cnd, degree, coef0)
+        coef[v, :, :len(i)] = fit[v][1]
+        if flat:
+            coef0[v, :, :len(i)] = fit[v][2]
+    return LocalFits(ids, coef, n_data, np.array(layers, dtype=np.int64), cnd, degree, coef0)
 
 
-def _weighted_fit(Y, n0, E, deg_of):
-    """(cond, A (M, N), A0 (M, N)) of the weighted fit to data at chart points Y (N, 2)."""
+def _fits_cached(cache, Ys, n0s, E, deg_of, flat):
+    """[(cond, A, A0)] for the layouts Ys [(N_i, 2)] with first-layer sizes n0s: one
+    solve per distinct (n0, rounded layout) (``cache``), batched by shape."""
+    # one rounding for all layouts (np.round per small array costs ~10 us)
+    o = np.cumsum([0] + [len(Y) for Y in Ys])
+    R = np.round(np.concatenate(Ys), 12) if len(Ys) else np.zeros((0, 2))
+    keys = [(n0, R[a:b].tobytes()) for n0, a, b in zip(n0s, o[:-1].tolist(), o[1:].tolist())]
+    todo = {}
+    for key, Y, n0 in zip(keys, Ys, n0s):
+        if key not in cache and key not in todo:
+            todo[key] = (Y, n0)
+    by_shape = {}
+    for key, (Y, n0) in todo.items():
+        by_shape.setdefault((len(Y), n0), []).append(key)
+    for (n, n0), ks in by_shape.items():
+        res = _weighted_fits(np.stack([todo[k][0] for k in ks]), n0, E, deg_of, flat)
+        cache.update(zip(ks, res))
+    return [cache[k] for k in keys]
+
+
+def _weighted_fits(Y, n0, E, deg_of, flat=True):
+    """[(cond, A (M, N), A0 (M, N) or None)] of the weighted fits to data at chart
+    points Y (G, N, 2) (a batch of layouts with first-layer size n0), by SVD."""
+    G, N = Y.shape[:2]
     M = len(E)
-    if not len(Y):
-        return np.inf, np.zeros((M, 0)), np.zeros((M, 0))
-    h = np.mean(np.hypot(Y[:n0, 0], Y[:n0, 1])) if n0 else 1.0
-    sw = h / np.hypot(Y[:, 0], Y[:, 1])  # sqrt of the weights (h/|y|)^2
-    B = np.prod((Y[:, None, :] / h) ** E[None, :, :], axis=-1) * sw[:, None]
+    if not N:
+        return [(np.inf, np.zeros((M, 0)), np.zeros((M, 0)))] * G
+    h = np.mean(np.hypot(Y[:, :n0, 0], Y[:, :n0, 1]), axis=1) if n0 else np.ones(G)
+    hh = h[:, None, None]
+    sw = hh[:, :, 0] / np.hypot(Y[..., 0], Y[..., 1])  # sqrt of the weights (h/|y|)^2
+    B = np.prod((Y[:, :, None, :] / hh[..., None]) ** E[None, None, :, :], axis=-1) * sw[..., None]
     U, S, Vt = np.linalg.svd(B, full_matrices=False)
-    cond = S[0] / S[-1] if len(Y) >= M and S[-1] > 0 else np.inf
-    # A = diag(h^-deg) pinv(B) diag(sw); singular values below RCOND * S[0] are dropped
-    # (rank-deficient data even after enlargement, e.g. a cubic from a few collinear
-    # boundary points: the minimum-norm fit, instead of round-off amplified by 1e16)
-    keep = S > RCOND * S[0]
-    A = ((Vt[keep].T / S[keep]) @ U[:, keep].T) * sw[None, :] / h ** deg_of[:, None]
-    return cond, A, _flat_fit(B, sw, h, deg_of)
+    conds = np.where((N >= M) & (S[:, -1] > 0), S[:, 0] / np.where(S[:, -1] > 0, S[:, -1], 1.0),
+                     np.inf)
+    if not flat and np.all(S > RCOND * S[:, :1]):  # full rank: all solves in one batch
+        A = ((Vt.transpose(0, 2, 1) / S[:, None, :]) @ U.transpose(0, 2, 1)) \
+            * sw[:, None, :] / h[:, None, None] ** deg_of[None, :, None]
+        return [(c, a, None) for c, a in zip(conds.tolist(), A)]
+    out = []
+    for j in range(G):
+        s = S[j]
+        cond = s[0] / s[-1] if N >= M and s[-1] > 0 else np.inf
+        # A = diag(h^-deg) pinv(B) diag(sw); singular values below RCOND * S[0] are
+        # dropped (rank-deficient data even after enlargement, e.g. a cubic from a few
+        # collinear boundary points: the minimum-norm fit, instead of round-off
+        # amplified by 1e16)
+        keep = s > RCOND * s[0]
+        A = ((Vt[j][keep].T / s[keep]) @ U[j][:, keep].T) * sw[j][None, :] / h[j] ** deg_of[:, None]
+        out.append((cond, A, _flat_fit(B[j], sw[j], h[j], deg_of) if flat else None))
+    return out
 
 
 def _flat_fit(B, sw, h, deg_of):

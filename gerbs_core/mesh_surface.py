@@ -48,6 +48,22 @@ def _points(name, a, V=None):
     return x
 
 
+def _first_and_inverse(*keys):
+    """Distinct tuples of equally long key arrays (compared exactly): (first (D,) the
+    index of each distinct tuple's first occurrence; inv (N,) the distinct tuple of
+    each i). A stable lexsort (np.unique(axis=0) is ~10x slower for small blocks)."""
+    order = np.lexsort(keys[::-1])  # first key primary; stable: first occurrence first
+    same = np.ones(max(len(order) - 1, 0), dtype=bool)
+    for k in keys:
+        sk = np.asarray(k)[order]
+        same &= sk[1:] == sk[:-1]
+    new = np.ones(len(order), dtype=bool)
+    new[1:] = ~same
+    inv = np.empty(len(order), dtype=np.int64)
+    inv[order] = np.cumsum(new) - 1
+    return order[new], inv
+
+
 class BlendingSurface:
     """GERBS blending surface of a polygon mesh (triangles, quads, n-gons; boundaries).
 
@@ -105,7 +121,8 @@ class BlendingSurface:
                                     self.shapes.angles, topo.star_offsets, topo.star_corners,
                                     topo.vertex_is_boundary, boundary)
         self.fits = fit_local_functions(topo, self.charts, self.shapes.corners, degree,
-                                        max_condition=max_condition)
+                                        max_condition=max_condition,
+                                        flat=normals is not None)
         self.degree = self.fits.degree
         self._envelopes, self._corner_env, self._env_offset = build_envelopes(
             topo, self.charts, self.shapes.corners, kappa=kappa, shrink=shrink,
@@ -228,63 +245,89 @@ class BlendingSurface:
                             + np.einsum("...mi,...ijk->...mjk", mm[1], yy[2]))
         return u, Psi, mono, psi[0].max(axis=0)
 
-    def _corner_terms_shared(self, n, faces, xt, memo=None):
-        """:meth:`_corner_terms` (nu = 0) when every face of the block has the same
-        reference polygon and samples xt (P, 2) (mode "regular", lattice template).
+    def _shared_tables(self, n, faces, xt, parts=None):
+        """The distinct corner terms of faces that all have the same reference polygon
+        and samples xt (P, 2) (mode "regular", lattice template).
 
-        Then r and the in-face angle depend only on the corner slot, psi only on
+        Then r and the in-face angle depend only on the corner slot k, psi only on
         (slot, envelope, sector start) and the monomials only on (slot, angle scale,
-        sector start): each distinct combination is evaluated once and gathered.
-        memo: optional dict shared by the blocks of one stencil (same lattice), so
-        combinations recurring in later blocks of a face size are not re-evaluated.
+        sector start): each distinct combination is evaluated once, for all faces
+        of the size class in one envelope/kernel evaluation per slot. ``parts``
+        (slices of ``faces``, default one): the blocks the stencil is built in;
+        combinations (rounded) are told apart per block, represented by their first
+        corner in the block, and representatives with equal exact inputs share the
+        evaluation of the first block having them (the block's first face is the
+        reference of the in-face angle) -- the values a per-block evaluation with a
+        memo of exact inputs gives.
+        Returns (corners (n, F), [(psi table (D, P), inv (F,), mono table (D', M, P)
+        or None, inv' (F,)) per slot]).
         """
         ch = self.charts
         off = self.topology.face_offsets
         corners = off[faces][None, :] + np.arange(n)[:, None]  # (n, F)
-        F, P = len(faces), len(xt)
+        P = len(xt)
         M = self.fits.coef.shape[1]
-        memo = {} if memo is None else memo
-        psi = np.empty((n, F, P))
-        mono = np.empty((n, F, P, M))
+        parts = [slice(0, len(faces))] if parts is None else parts
+        bid = np.repeat(np.arange(len(parts)), [p.stop - p.start for p in parts])
+        starts = np.array([p.start for p in parts])
+        tabs = []
         for k in range(n):
             ck = corners[k]
-            (r, th), = ch.polar(np.broadcast_to(ck[:1, None], (1, P)), xt[None], 0)
-            r, a = r[0], th[0] - ch.theta0[ck[0]]
+            # r and in-face angle a of the template points, per block (its first face)
+            (r, th), = ch.polar(np.broadcast_to(ck[starts][:, None], (len(parts), P)),
+                                xt[None], 0)
+            a = th - ch.theta0[ck[starts]][:, None]
             shift = np.round(ch.theta0[ck] - self._env_offset[ck], 11)
-            key = np.stack([self._corner_env[ck], shift], 1)
-            _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-            rep = ck[first]  # tags: the exact inputs of the evaluation below
-            tags = [("psi", n, P, k) + t for t in zip(self._corner_env[rep].tolist(),
-                                                      ch.theta0[rep].tolist(),
-                                                      self._env_offset[rep].tolist())]
-            new = [i for i, t in enumerate(tags) if t not in memo]
-            if new:
-                rep = rep[new]
-                uu = eval_envelopes(self._envelopes, self._corner_env, self._env_offset, rep,
-                                    ch.theta0[rep][:, None] + a[None, :], 0)[0]
-                vals = 1.0 - self.kernel.cdf_derivs(r[None, :] * uu, 0)[0]
-                memo.update(zip([tags[i] for i in new], vals))
-            psi[k] = np.stack([memo[t] for t in tags])[inv.ravel()]
+            first, inv = _first_and_inverse(bid, self._corner_env[ck], shift)
+            rep = ck[first]  # one representative corner per distinct combination
+            # the exact inputs of the representatives: equal ones (from different
+            # blocks) are evaluated once, in the first block that has them
+            f2, inv2 = _first_and_inverse(self._corner_env[rep], ch.theta0[rep],
+                                          self._env_offset[rep])
+            rep, b, inv = rep[f2], bid[first[f2]], inv2[inv]
+            uu = eval_envelopes(self._envelopes, self._corner_env, self._env_offset, rep,
+                                ch.theta0[rep][:, None] + a[b], 0)[0]
+            psi_tab = 1.0 - self.kernel.cdf_derivs(r[b] * uu, 0)[0]
+            mono_tab = mono_inv = None
             if M:
                 s = ch.scale[ch.corner_vertex[ck]]
-                key = np.stack([np.round(s, 12), np.round(ch.theta0[ck], 11)], 1)
-                _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
-                tags = [("mono", n, P, k) + t for t in zip(s[first].tolist(),
-                                                           ch.theta0[ck[first]].tolist())]
-                new = [i for i, t in enumerate(tags) if t not in memo]
-                if new:
-                    fn = first[new]
-                    phi = s[fn][:, None] * (ch.theta0[ck[fn]][:, None] + a[None, :])
-                    y = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=-1)
-                    memo.update(zip([tags[i] for i in new], monomials(y, self.degree, 0)[0]))
-                mono[k] = np.stack([memo[t] for t in tags])[inv.ravel()]
+                fm, mono_inv = _first_and_inverse(bid, np.round(s, 12),
+                                                  np.round(ch.theta0[ck], 11))
+                f2, inv2 = _first_and_inverse(s[fm], ch.theta0[ck[fm]])
+                fm, mono_inv = fm[f2], inv2[mono_inv]
+                b = bid[fm]
+                phi = s[fm][:, None] * (ch.theta0[ck[fm]][:, None] + a[b])
+                y = np.stack([r[b] * np.cos(phi), r[b] * np.sin(phi)], axis=-1)
+                # stored transposed (M, P): the layout the stencil assembly multiplies
+                mono_tab = np.ascontiguousarray(monomials(y, self.degree, 0)[0].transpose(0, 2, 1))
+            tabs.append((psi_tab, inv, mono_tab, mono_inv))
+        return corners, tabs
+
+    def _corner_terms_shared(self, n, faces, xt, tables=None, part=slice(None)):
+        """:meth:`_corner_terms` (nu = 0) from :meth:`_shared_tables`: ``tables`` made
+        for a superset of faces (default: for ``faces``), ``part`` the slice of it
+        that is ``faces``. The monomials are returned shared, not gathered: a list over
+        the corner slots k of (table (D, M, P), inv (F,)) with mono_k of face f =
+        table[inv[f]].T (the form :func:`gerbs_core.stencil.assemble_csr` takes).
+        """
+        corners, tabs = self._shared_tables(n, faces, xt) if tables is None else tables
+        corners = corners[:, part]
+        F, P = corners.shape[1], len(xt)
+        psi = np.empty((n, F, P))
+        mono = []  # per slot k: (table (D, M, P), inv (F,)), mono_k[f] = table[inv[f]].T
+        for k, (psi_tab, inv, mono_tab, mono_inv) in enumerate(tabs):
+            psi[k] = psi_tab[inv[part]]
+            if mono_tab is not None:
+                mono.append((mono_tab, mono_inv[part]))
         S0 = psi.sum(axis=0)
         return self.topology.face_vertices[corners], [psi / S0], [mono], psi.max(axis=0)
 
     def _template_blocks(self, lat):
-        """Yield (n, faces, sel, xt) per face size: all lattice points of each face in
-        template order (shared points once per face; sel = -1 where another face owns
-        the sample) -- for :meth:`_corner_terms_shared`."""
+        """Yield (n, faces, sel, xt, class_faces, part, per) per block of faces of one
+        size: all lattice points of each face in template order (shared points once
+        per face; sel = -1 where another face owns the sample), the block's slice
+        ``part`` of all faces of its size and the block length ``per`` -- for
+        :meth:`_shared_tables` / :meth:`_corner_terms_shared`."""
         topo = self.topology
         lo = lat.local_offsets
         for n in np.unique(topo.face_sizes).tolist():
@@ -297,15 +340,14 @@ class BlendingSurface:
                 idx = lo[faces][:, None] + np.arange(P)[None, :]
                 smp = lat.local_sample[idx]
                 sel = np.where(lat.face[smp] == faces[:, None], smp, -1)
-                yield n, faces, sel, xt
+                yield n, faces, sel, xt, fk, slice(a, a + len(faces)), per
 
     def _template_points(self, lat, f):
         """Face-local coordinates of face f's lattice points in template order (the
         formulas of Lattice.map_to_polygon, for one face only)."""
         topo = self.topology
-        a, b = lat.local_offsets[f], lat.local_offsets[f + 1]
-        uv, fan = lat.local_uv[a:b], lat.local_fan[a:b]
         X = self.shapes.corners[topo.face_offsets[f]:topo.face_offsets[f + 1]]
+        uv, fan = lat.template_params(len(X))  # = lat.local_uv/local_fan of face f
         n = len(X)
         s, t = uv[:, :1], uv[:, 1:]
         if n == 3:
@@ -523,9 +565,16 @@ class BlendingSurface:
         eps = np.inf
         ids, coef = self.fits.ids, self.fits.coef
         if self.mode == "regular":  # identical reference polygons: shared template
-            memo = {}
-            groups = ((n, f, sel, xt, self._corner_terms_shared(n, f, xt, memo))
-                      for n, f, sel, xt in self._template_blocks(lat))
+            tables = {}  # per face size: the distinct corner terms of all its faces
+
+            def shared(n, f, xt, fk, part, per):
+                if n not in tables:
+                    tables[n] = self._shared_tables(
+                        n, fk, xt, [slice(a, min(a + per, len(fk))) for a in range(0, len(fk), per)])
+                return self._corner_terms_shared(n, f, xt, tables[n], part)
+
+            groups = ((n, f, sel, xt, shared(n, f, xt, fk, part, per))
+                      for n, f, sel, xt, fk, part, per in self._template_blocks(lat))
         else:
             x = lat.map_to_polygon(self.shapes.corners)
             groups = ((n, f, sel, xb, self._corner_terms(n, f, xb, 0))
@@ -535,4 +584,4 @@ class BlendingSurface:
             blocks.append((faces, sel, u, Psi[0], mono[0]))
         self._last_eps0 = eps
         W = assemble_csr(blocks, ids, coef, lat.n_points, self.topology.n_vertices)
-        return Stencil(W, np.array(lat.triangles), np.array(lat.vertex_sample))
+        return Stencil(W, lat.triangles, lat.vertex_sample, lat)  # read-only, not copied

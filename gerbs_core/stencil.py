@@ -18,8 +18,10 @@ samples of faces within face-distance 3 of w's star (star, blending: one more
 ring of faces).
 
 Assembly is vectorized: per face-size class the rows of a face are one dense
-block over the face's local columns L_f, written straight into CSR form (each
-sample belongs to exactly one face: no duplicate summation).
+block over the face's local columns L_f, computed by batched matmuls into an
+"assembly" CSR matrix whose rows are (face, lattice point) slots; W is its row
+selection of the owning slots (each sample belongs to exactly one face: no
+duplicate summation).
 """
 from __future__ import annotations
 
@@ -33,11 +35,15 @@ __all__ = ["Stencil", "assemble_csr"]
 
 @dataclass(frozen=True)
 class Stencil:
-    """matrix: csr (P, V); triangles (T,3); vertex_samples (V,): output point of each vertex."""
+    """matrix: csr (P, V); triangles (T,3), vertex_samples (V,) (read-only, shared with
+    the lattice): output triangles and the output point of each
+    vertex; lattice: the :class:`gerbs_core.tessellation.Lattice` of the samples (its
+    ``triangle_face``, ``edges()``), or None."""
 
     matrix: sp.csr_matrix
     triangles: np.ndarray
     vertex_samples: np.ndarray
+    lattice: object = None
 
     def apply(self, X) -> np.ndarray:
         """Output points (P, 3) = W @ X for vertex positions X (V, 3) (any (V, k)).
@@ -87,59 +93,92 @@ def _local_columns(cand: np.ndarray):
 def assemble_csr(blocks, ids, coef, n_points: int, n_vertices: int) -> sp.csr_matrix:
     """W from per-class blocks (faces, sel, u, Psi, mono) of the surface machinery.
 
-    faces (F,), sel (F,P) sample index or -1, u (n,F) corner vertices, Psi (n,F,P),
-    mono (n,F,P,M); ids (V,N) / coef (V,M,N) the local fits.
+    faces (F,), sel (F,P) sample index or -1 (another face owns the sample, or
+    padding), u (n,F) corner vertices, Psi (n,F,P); mono either (n,F,P,M) or, shared
+    (mode "regular"), a list of n pairs (table (D,M,P), inv (F,)) with
+    mono[k][f] = table[inv[f]].T; ids (V,N) / coef (V,M,N) the local fits.
 
-    Faces are further grouped by their number c of local columns, so every group's
-    rows are rectangular (rows x c) blocks: no padding is computed or masked out.
+    Faces are grouped by their number c of local columns (sorted, so a group is a
+    slice), so every group's rows are one rectangular (G*P, c) block computed by one
+    batched matmul straight into a contiguous stretch of an "assembly" CSR matrix
+    whose rows are (face, sample slot) pairs; W is then the row selection of the
+    owned slots (one C-level copy of each row, in sample order). No scatter of the
+    2M entries and no padding is computed or masked out. Each row's columns are
+    sorted (L is).
     """
     N = ids.shape[1]
     K = 1 + N
-    # pass 1: the local columns of every face, hence each row's nnz and indptr
-    cols = []
-    nnz_row = np.zeros(n_points, dtype=np.int64)
+    M = coef.shape[1]
+    # pass 1: the local columns L of every face and its count c; faces sorted by c
+    prep = []
+    n_rows = nnz = 0
     for faces, sel, u, Psi, mono in blocks:
         n, F = u.shape
         cand = np.concatenate([u[:, :, None], ids[u]], axis=2)  # (n, F, 1+N)
         L, pos = _local_columns(np.transpose(cand, (1, 0, 2)).reshape(F, n * K))
         cnt = (L >= 0).sum(axis=1)  # valid local columns of each face: 0 .. cnt-1
-        nnz_row[sel[sel >= 0]] = np.broadcast_to(cnt[:, None], sel.shape)[sel >= 0]
-        cols.append((L, pos, cnt))
-    indptr = np.zeros(n_points + 1, dtype=np.int64)
-    np.cumsum(nnz_row, out=indptr[1:])
-    nnz = int(indptr[-1])
-    # rows another face owns (sel -1) all go to a scratch tail (no masked copies)
-    tail = max((int(L.shape[1]) for L, _, _ in cols), default=0)
-    data = np.empty(nnz + tail)
-    indices = np.empty(nnz + tail, dtype=np.int32)
-    # pass 2: W = [Psi_k mono_k, Psi_k]_k @ C per face, one batched matmul per group of
-    # faces with equal column count c: l_{u_k} = X_u + mono . A (X_N - X_u) written in
-    # the face's local columns; each row comes from exactly one face, so the blocks
-    # go straight to their CSR positions
-    for (faces, sel, u, Psi, mono), (L, pos, cnt) in zip(blocks, cols):
+        L = L.astype(np.int32 if n_vertices < 2 ** 31 - 1 else np.int64)
+        order = np.argsort(cnt, kind="stable")
+        cs = cnt[order]
+        cuts = np.flatnonzero(np.diff(cs)) + 1
+        bounds = list(zip(np.r_[0, cuts].tolist(), np.r_[cuts, F].tolist()))
+        prep.append((L, pos, order, cs, bounds))
+        n_rows += F * sel.shape[1]
+        nnz += sel.shape[1] * int(cnt.sum())
+    idx_dtype = np.int32 if max(nnz, n_vertices) < np.iinfo(np.int32).max else np.int64
+    data = np.empty(nnz)
+    indices = np.empty(nnz, dtype=np.int32 if n_vertices < 2 ** 31 - 1 else np.int64)
+    lens = np.empty(n_rows, dtype=idx_dtype)
+    owner = np.full(n_points, -1, dtype=idx_dtype)  # assembly row of each sample
+    # pass 2: rows = [Psi_k mono_k, Psi_k]_k @ C per face: l_{u_k} = X_u + mono . A
+    # (X_N - X_u) written in the face's local columns. The factors of a whole block
+    # are built at once, faces in order of c, so each group's factors are views;
+    # then one batched matmul per group of equal c
+    row = at = 0
+    for (faces, sel, u, Psi, mono), (L, pos, order, cs, bounds) in zip(blocks, prep):
         n, F, P = Psi.shape
-        M = mono.shape[-1]
-        PM = np.empty((F, P, n * (M + 1)))
+        if M and not isinstance(mono, list):
+            mono = [(mono[k].transpose(0, 2, 1), None) for k in range(n)]
+        PMt = np.empty((F, n * (M + 1), P))  # transposed: rows of P contiguous
         for k in range(n):
-            PM[:, :, n * M + k] = Psi[k]
+            Pk = Psi[k][order]
+            PMt[:, n * M + k] = Pk
             if M:
-                np.multiply(mono[k], Psi[k][:, :, None], out=PM[:, :, k * M:(k + 1) * M])
-        start = np.where(sel >= 0, indptr[np.maximum(sel, 0)], nnz)
-        for c in np.unique(cnt).tolist():
-            g = np.flatnonzero(cnt == c)
-            G = len(g)
-            gi = np.arange(G)
-            posg = np.minimum(pos[g], c)  # padding ids -> one scratch column c
-            C = np.zeros((G, n * (M + 1), c + 1))
-            for k in range(n):
-                pk = posg[:, k * K:(k + 1) * K]  # local columns of [u_k, N_{u_k}]
-                C[gi, n * M + k, pk[:, 0]] = 1.0  # the constant X_u
-                if M:
-                    A = coef[u[k, g]]  # (G, M, N); padding columns are 0
-                    rows = k * M + np.arange(M)
-                    C[gi[:, None, None], rows[None, :, None], pk[:, None, 1:]] = A
-                    C[gi[:, None], rows[None, :], pk[:, :1]] -= A.sum(axis=2)
-            dest = start[g][:, :, None] + np.arange(c)
-            data[dest] = np.matmul(PM[g], C[:, :, :c])  # (G, P, c)
-            indices[dest] = L[g, None, :c]
-    return sp.csr_matrix((data[:nnz], indices[:nnz], indptr), shape=(n_points, n_vertices))
+                tab, inv = mono[k]
+                np.multiply(tab[order if inv is None else inv[order]], Pk[:, None, :],
+                            out=PMt[:, k * M:(k + 1) * M])
+        # C (F, n(M+1), m): padding ids sit at column cnt_f (the face's first -1 in L)
+        # and only ever receive zeros (their coef is 0), so columns >= c_f are 0
+        gi = np.arange(F)
+        po = pos[order]
+        uo = u[:, order]
+        C = np.zeros((F, n * (M + 1), L.shape[1]))
+        for k in range(n):
+            pk = po[:, k * K:(k + 1) * K]  # local columns of [u_k, N_{u_k}]
+            C[gi, n * M + k, pk[:, 0]] = 1.0  # the constant X_u
+            if M:
+                A = coef[uo[k]]  # (F, M, N); padding columns are 0
+                rows = k * M + np.arange(M)
+                C[gi[:, None, None], rows[None, :, None], pk[:, None, 1:]] = A
+                C[gi[:, None], rows[None, :], pk[:, :1]] -= A.sum(axis=2)
+        Lo = L[order]
+        for a, b in bounds:
+            c = int(cs[a])
+            G = b - a
+            m = G * P * c
+            np.matmul(PMt[a:b].transpose(0, 2, 1), C[a:b, :, :c],
+                      out=data[at:at + m].reshape(G, P, c))
+            indices[at:at + m].reshape(G, P, c)[...] = Lo[a:b, None, :c]
+            at += m
+        lens[row:row + F * P] = np.repeat(cs, P)
+        s = sel[order]
+        ok = s >= 0
+        owner[s[ok]] = (row + np.arange(F * P, dtype=idx_dtype)).reshape(F, P)[ok]
+        row += F * P
+    if n_points and owner.min() < 0:
+        raise AssertionError("assemble_csr: a sample has no owning face")
+    indptr = np.zeros(n_rows + 1, dtype=idx_dtype)
+    np.cumsum(lens, out=indptr[1:])
+    A = sp.csr_matrix((data, indices.astype(idx_dtype, copy=False), indptr),
+                      shape=(n_rows, n_vertices))
+    return A[owner]

@@ -27,7 +27,7 @@ lets callers (and tests) evaluate a shared sample from every incident face.
 """
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -166,6 +166,53 @@ def _template(n: int, r: int):
     return out
 
 
+@lru_cache(maxsize=64)
+def _template_edges(n: int, r: int):
+    """Edges of the lattice triangles of an n-gon template (read-only arrays).
+
+    Returns (tedge (te, 2), tri_edge (t, 3), side (te,), seg (te,)): the distinct
+    undirected edges in template indices (repeated template points, e.g. an n-gon's
+    centre, merged), the edge from corner i to corner i+1 of every template
+    triangle, and for edges along the polygon's side k (corner k -> k+1) side = k
+    and seg = m, the segment from position m to m+1 counted from corner k; side =
+    -1 for edges inside the polygon (these come first).
+    """
+    uv, fan, kind, loc, pos, canon, tris = _template(n, r)
+    npt = len(kind)
+    _, first, inv = np.unique(np.stack([kind, loc, pos], 1), axis=0, return_index=True,
+                              return_inverse=True)
+    cid = first[inv.ravel()]  # canonical template index of every occurrence
+    a = cid[tris]
+    b = cid[np.roll(tris, -1, axis=1)]
+    ukey, tri_edge = np.unique(np.minimum(a, b) * npt + np.maximum(a, b), return_inverse=True)
+    tedge = np.stack([ukey // npt, ukey % npt], 1)
+    side = np.full(len(tedge), -1, dtype=np.int64)
+    seg = np.zeros(len(tedge), dtype=np.int64)
+    for k in range(n):
+        sp = np.full(npt, -1, dtype=np.int64)  # position along side k, or -1
+        sp[(kind == _CORNER) & (loc == k)] = 0
+        sp[(kind == _CORNER) & (loc == (k + 1) % n)] = r
+        on = (kind == _EDGE) & (loc == k)
+        sp[on] = pos[on]
+        pa, pb = sp[tedge[:, 0]], sp[tedge[:, 1]]
+        on = (pa >= 0) & (pb >= 0) & (np.abs(pa - pb) == 1)
+        side[on], seg[on] = k, np.minimum(pa, pb)[on]
+    order = np.argsort(side >= 0, kind="stable")  # inner edges first
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    out = (tedge[order], rank[tri_edge].reshape(tris.shape), side[order], seg[order])
+    for x in out:
+        x.flags.writeable = False
+    return out
+
+
+def _scatter_rows(dst: np.ndarray, rows: np.ndarray, src: np.ndarray) -> None:
+    """dst[rows] = src for C-contiguous 2-D arrays, each row moved as one opaque item
+    (numpy's row-wise fancy assignment is ~2x slower for short rows)."""
+    item = np.dtype((np.void, dst.itemsize * dst.shape[1]))
+    dst.view(item).ravel()[rows] = np.ascontiguousarray(src, dtype=dst.dtype).view(item).ravel()
+
+
 def _ro(a):
     a = np.ascontiguousarray(a)
     a.flags.writeable = False
@@ -202,8 +249,8 @@ class Lattice:
         owner_corner = tp.star_corners[tp.star_offsets[:-1]]
         first_he = tp.edge_halfedges[:, 0]
 
-        face_g, fan_g, uv_g = np.empty(P, dtype=np.int64), np.empty(P, dtype=np.int64), np.empty((P, 2))
-        parts = []  # (faces, G (nf, npt), template)
+        face_g = np.empty(P, dtype=np.int64)
+        parts = []  # (faces, G (nf, npt) samples, own (nf, npt) owned, face size)
         for n in np.unique(sizes).tolist():
             fk = np.flatnonzero(sizes == n)
             uv, fan, kind, loc, pos, canon, tris = _template(n, r)
@@ -224,33 +271,177 @@ class Lattice:
             c = kind == _INTERIOR
             G[:, c] = block[fk][:, None] + loc[c]
             own[:, c] = canon[c]
-            sel = G[own]
-            face_g[sel] = np.broadcast_to(fk[:, None], G.shape)[own]
-            fan_g[sel] = np.broadcast_to(fan, G.shape)[own]
-            uv_g[sel] = np.broadcast_to(uv, G.shape + (2,))[own]
-            parts.append((fk, G, uv, fan, tris))
-
-        lf = np.concatenate([np.repeat(fk, G.shape[1]) for fk, G, *_ in parts])
-        lorder = np.argsort(lf, kind="stable")
-        self.local_face = _ro(lf[lorder])
-        self.local_sample = _ro(np.concatenate([G.ravel() for _, G, *_ in parts])[lorder])
-        self.local_fan = _ro(np.concatenate([np.tile(fan, len(fk)) for fk, _, _, fan, _ in parts])[lorder])
-        self.local_uv = _ro(np.concatenate([np.tile(uv, (len(fk), 1)) for fk, _, uv, *_ in parts])[lorder])
+            face_g[G[own]] = np.broadcast_to(fk[:, None], G.shape)[own]
+            parts.append((fk, G, own, n))
+        # the per-class tables are merged into face order by offsets (each face is in
+        # exactly one class, in template order): scatters, no sort
+        npts = np.zeros(F, dtype=np.int64)
+        for fk, G, _, _ in parts:
+            npts[fk] = G.shape[1]
         loff = np.zeros(F + 1, dtype=np.int64)
-        np.cumsum(np.bincount(lf, minlength=F), out=loff[1:])
+        np.cumsum(npts, out=loff[1:])
+        toff = np.zeros(F + 1, dtype=np.int64)
+        np.cumsum(tcount, out=toff[1:])
+        local_sample = np.empty(int(loff[-1]), dtype=np.int64)
+        tri = np.empty((T, 3), dtype=np.int64)
+        for fk, G, own, n in parts:
+            tris = _template(n, r)[6]
+            npt, nt_ = G.shape[1], len(tris)
+            if len(parts) == 1:
+                local_sample[:] = G.ravel()
+                tri[:] = G[:, tris].reshape(-1, 3)
+            else:
+                local_sample[(loff[fk][:, None] + np.arange(npt)).ravel()] = G.ravel()
+                dest = (toff[fk][:, None] + np.arange(nt_)).ravel()
+                _scatter_rows(tri, dest, G[:, tris].reshape(-1, 3))
+        self._parts = parts
+        self.local_sample = _ro(local_sample)
         self.local_offsets = _ro(loff)
-
-        tri = np.concatenate([G[:, tris].reshape(-1, 3) for _, G, _, _, tris in parts])
-        tface = np.concatenate([np.repeat(fk, len(tris)) for fk, _, _, _, tris in parts])
-        torder = np.argsort(tface, kind="stable")
-        self.triangles = _ro(tri[torder])
-        self.triangle_face = _ro(tface[torder])
-        self.face, self.fan, self.uv = _ro(face_g), _ro(fan_g), _ro(uv_g)
+        self.triangles = _ro(tri)
+        self._tcount = tcount
+        self.face = _ro(face_g)
         self.vertex_sample = _ro(np.arange(V, dtype=np.int64))
         self.edge_samples = _ro(V + np.arange(E * (r - 1), dtype=np.int64).reshape(E, r - 1))
         self.topology, self.resolution = tp, r
         self.n_points, self.n_triangles = P, T
         assert len(self.triangles) == T and int(tcount.sum()) == T
+
+    # faces in face order: made on first use from the counts
+    @cached_property
+    def triangle_face(self) -> np.ndarray:
+        return _ro(np.repeat(np.arange(self.topology.n_faces, dtype=np.int64), self._tcount))
+
+    @cached_property
+    def local_face(self) -> np.ndarray:
+        return _ro(np.repeat(np.arange(self.topology.n_faces, dtype=np.int64),
+                             np.diff(self.local_offsets)))
+
+    # per-sample and local-table parameters are made on first use (the stencil of a
+    # mode "regular" surface needs neither)
+    @cached_property
+    def uv(self) -> np.ndarray:
+        self._params()
+        return self.__dict__["uv"]
+
+    @cached_property
+    def fan(self) -> np.ndarray:
+        self._params()
+        return self.__dict__["fan"]
+
+    def _params(self):
+        uv_g = np.empty((self.n_points, 2))
+        fan_g = np.empty(self.n_points, dtype=np.int64)
+        for fk, G, own, n in self._parts:
+            uv, fan = _template(n, self.resolution)[:2]
+            sel = G[own]
+            fan_g[sel] = np.broadcast_to(fan, G.shape)[own]
+            uv_g[sel] = np.broadcast_to(uv, G.shape + (2,))[own]
+        self.__dict__["uv"], self.__dict__["fan"] = _ro(uv_g), _ro(fan_g)
+
+    @cached_property
+    def local_uv(self) -> np.ndarray:
+        self._local_params()
+        return self.__dict__["local_uv"]
+
+    @cached_property
+    def local_fan(self) -> np.ndarray:
+        self._local_params()
+        return self.__dict__["local_fan"]
+
+    def _local_params(self):
+        L = len(self.local_face)
+        uv_l = np.empty((L, 2))
+        fan_l = np.empty(L, dtype=np.int64)
+        lo = self.local_offsets
+        for fk, G, own, n in self._parts:
+            uv, fan = _template(n, self.resolution)[:2]
+            dest = (lo[fk][:, None] + np.arange(G.shape[1])).ravel()
+            uv_l[dest] = np.tile(uv, (len(fk), 1))
+            fan_l[dest] = np.tile(fan, len(fk))
+        self.__dict__["local_uv"], self.__dict__["local_fan"] = _ro(uv_l), _ro(fan_l)
+
+    def edges(self):
+        """(edge_verts (E_out, 2), corner_edges (T, 3)) int32 of the output triangle mesh,
+        from the lattice structure (no hashing of T*3 half-edges), or None where that
+        structure alone does not settle it (quads at resolution 1: two quads may
+        share a diagonal).
+
+        Numbering: the r segments of every mesh edge e first (e*r + j, segment j
+        from ``edges[e,0]``), then the edges inside the faces, face-size class by
+        class, face by face. ``corner_edges[t, i]`` is the edge from
+        ``triangles[t, i]`` to ``triangles[t, (i+1) % 3]`` (Blender's corner_edge
+        convention). Every undirected edge of the triangles exactly once (tested
+        against a hash).
+
+        Why no hashing is needed: an edge inside a face joins two lattice points of
+        that face; it can be another face's edge too only if both points lie on
+        both faces, i.e. (r >= 2) on two sides meeting at a vertex w that both faces
+        contain, so the two faces share both edges at w: w is an interior vertex of
+        valence 2. Only the faces around such vertices are checked for repeats.
+        """
+        tp, r = self.topology, self.resolution
+        V, E = tp.n_vertices, tp.n_edges
+        sizes, fo, fv = tp.face_sizes, tp.face_offsets, tp.face_vertices
+        if (r == 1 and np.any(sizes == 4)) or self.n_points >= 2 ** 31 - 1:
+            return None
+        i32 = np.int32
+        S = np.empty((E, r + 1), dtype=i32)  # samples along each mesh edge
+        S[:, 0], S[:, r] = tp.edges[:, 0], tp.edges[:, 1]
+        S[:, 1:r] = V + np.arange(E * (r - 1), dtype=i32).reshape(E, r - 1)
+        n_in = [int((_template_edges(n, r)[2] < 0).sum()) * len(fk)
+                for fk, _, _, n in self._parts]
+        ev = np.empty((E * r + sum(n_in), 2), dtype=i32)
+        ev[:E * r, 0] = S[:, :-1].ravel()
+        ev[:E * r, 1] = S[:, 1:].ravel()
+        toff = np.zeros(tp.n_faces + 1, dtype=np.int64)
+        np.cumsum(_face_counts(sizes, r)[1], out=toff[1:])
+        ce = np.empty((self.n_triangles, 3), dtype=i32)
+        inner_of = np.empty(tp.n_faces + 1, dtype=np.int64)  # first inner edge id per face
+        inner_of[-1] = len(ev)
+        base = E * r
+        for (fk, G, _, n), cnt in zip(self._parts, n_in):
+            tedge, tri_edge, side, seg = _template_edges(n, r)
+            ni = cnt // max(len(fk), 1)
+            ids = np.empty((len(fk), len(tedge)), dtype=i32)
+            ids[:, :ni] = base + np.arange(cnt, dtype=i32).reshape(len(fk), ni)
+            inner_of[fk] = base + ni * np.arange(len(fk))
+            h = fo[fk][:, None] + side[ni:][None, :]  # half-edge of the side
+            e = tp.halfedge_edge[h]
+            m = seg[ni:][None, :]
+            ids[:, ni:] = e * r + np.where(fv[h] == tp.edges[e, 0], m, r - 1 - m)
+            np.take(G.astype(i32), tedge[:ni].ravel(), axis=1, mode="clip",
+                    out=ev[base:base + cnt].reshape(len(fk), 2 * ni))
+            base += cnt
+            tri = np.take(ids, tri_edge.ravel(), axis=1).reshape(-1, 3)
+            if len(self._parts) == 1:
+                ce[:] = tri
+            else:
+                _scatter_rows(ce, (toff[fk][:, None] + np.arange(len(tri_edge))).ravel(), tri)
+        weak = np.flatnonzero(~np.asarray(tp.vertex_is_boundary, dtype=bool)
+                              & (np.diff(tp.star_offsets) <= 2))
+        if len(weak):  # merge repeated inner edges of the faces around them
+            so, sc = tp.star_offsets, tp.star_corners
+            faces = np.unique(tp.corner_face[np.concatenate(
+                [sc[so[w]:so[w + 1]] for w in weak.tolist()])])
+            nin = {n: int((_template_edges(n, r)[2] < 0).sum()) for _, _, _, n in self._parts}
+            cand = np.concatenate([inner_of[f] + np.arange(nin[int(sizes[f])])
+                                   for f in faces.tolist()])
+            pair = np.sort(ev[cand], axis=1)
+            _, first, inv = np.unique(pair, axis=0, return_index=True, return_inverse=True)
+            if len(first) < len(cand):
+                remap = np.arange(len(ev), dtype=i32)
+                remap[cand] = cand[first[inv.ravel()]]
+                keep = remap == np.arange(len(ev))
+                remap = (np.cumsum(keep, dtype=i32) - 1)[remap]
+                ev, ce = ev[keep], remap[ce]
+        return ev, ce
+
+    def template_params(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(uv (m, 2), fan (m,)) of every lattice point of an n-gon in template order: the
+        local table of any face with n corners (``local_uv/local_fan[local_offsets[f]:
+        local_offsets[f+1]]``), without building the whole table."""
+        uv, fan = _template(int(n), self.resolution)[:2]
+        return uv, fan
 
     def face_groups(self) -> tuple[np.ndarray, np.ndarray]:
         """(order (P,), offsets (F+1,)): ``order[offsets[f]:offsets[f+1]]`` are the samples

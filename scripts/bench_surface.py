@@ -6,7 +6,8 @@ update time (W @ X), memory (tracemalloc peak of the build), nnz per row; and,
 when ``import bpy`` works, Blender's Subdivision Surface modifier at the matching
 level (level L <-> resolution 2**L) in the same run: build = add the modifier and
 evaluate the depsgraph from scratch; update = move one vertex and evaluate again.
-Medians of repeats; ratios GERBS / Subsurf.
+Medians of repeats; ratios GERBS / Subsurf. The cold GERBS builds and the Subsurf
+builds alternate (one of each per round), so both see the same machine load.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/bench_surface.py [--repeats 5] [--tables]
 
@@ -46,7 +47,10 @@ def median_time(fn, repeats):
     return statistics.median(ts), out
 
 
-def gerbs_case(V, F, r, repeats):
+def gerbs_case(V, F, r, repeats, subsurf_build=None):
+    """GERBS timings; with ``subsurf_build`` (a function timing one Subsurf build) the
+    cold builds alternate with Subsurf builds, so both see the same machine load
+    (returned as ``ss_build``, the median)."""
     def build():
         s = BlendingSurface(V, F)
         return s, s.stencil(r)
@@ -56,7 +60,14 @@ def gerbs_case(V, F, r, repeats):
         return build()
 
     build()  # warm-up (imports, kernel tables)
-    tb, (s, st) = median_time(cold, repeats)
+    tcold, tss = [], []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        s, st = cold()
+        tcold.append(time.perf_counter() - t)
+        if subsurf_build is not None:
+            tss.append(subsurf_build())
+    tb = statistics.median(tcold)
     tw, _ = median_time(build, repeats)
     X = V.copy()
     X[0] += 1e-3
@@ -70,10 +81,12 @@ def gerbs_case(V, F, r, repeats):
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     return dict(points=st.matrix.shape[0], build=tb, warm=tw, update=tu, mem=peak / 1e6,
-                nnz=st.nnz_per_row, eps0=s.last_eps0)
+                nnz=st.nnz_per_row, eps0=s.last_eps0,
+                ss_build=statistics.median(tss) if tss else None)
 
 
 def blender_case(bpy, V, F, level, repeats):
+    """Subsurf set-up; returns (build (one timed from-scratch build), update timing)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     mesh = bpy.data.meshes.new("bench")
     mesh.from_pydata([tuple(map(float, v)) for v in V], [], [tuple(map(int, f)) for f in F])
@@ -98,7 +111,6 @@ def blender_case(bpy, V, F, level, repeats):
         return time.perf_counter() - t
 
     build()
-    tb = statistics.median([build() for _ in range(repeats)])
     step = [1e-3]
 
     def update():
@@ -112,7 +124,7 @@ def blender_case(bpy, V, F, level, repeats):
 
     update()
     tu = statistics.median([update() for _ in range(max(repeats, 10))])
-    return dict(points=counts[-1], build=tb, update=tu)
+    return build, dict(points=counts[-1], update=tu)
 
 
 def franke_table():
@@ -155,11 +167,13 @@ def main():
     for name, (V, F) in meshes.items():
         for level in (2, 3, 4):
             r = 2 ** level
-            g = gerbs_case(V, F, r, args.repeats)
+            ss_build, b = (blender_case(bpy, V, F, level, args.repeats) if bpy is not None
+                           else (None, None))
+            g = gerbs_case(V, F, r, args.repeats, ss_build)
             line = (f"{name:13} {level}/{r:<2} {g['points']:7d} {g['build']:8.3f} {g['warm']:7.3f} "
                     f"{g['update'] * 1e3:9.2f} {g['mem']:7.0f} {g['nnz']:7.1f} {g['eps0']:6.3f}")
             if bpy is not None:
-                b = blender_case(bpy, V, F, level, args.repeats)
+                b["build"] = g["ss_build"]
                 line += (f" | {b['points']:9d} {b['build']:10.3f} {b['update'] * 1e3:9.2f} | "
                          f"{g['build'] / b['build']:7.2f} {g['warm'] / b['build']:6.2f} "
                          f"{g['update'] / b['update']:8.3f}")

@@ -83,3 +83,59 @@ def test_locality_exact(name):
             fv_ok = np.zeros(topo.n_faces, dtype=bool)
             np.logical_or.at(fv_ok, topo.corner_face, np.isin(topo.face_vertices, ring))
             assert fv_ok[lat.face[d > 0]].all()
+
+
+def _hashed_edges(L):
+    """The undirected edges of the lattice triangles by brute force: sorted keys, and the
+    key of the edge from corner i to corner i+1 of every triangle."""
+    T = np.asarray(L.triangles, dtype=np.int64)
+    a, b = T, np.roll(T, -1, axis=1)
+    key = np.minimum(a, b) * L.n_points + np.maximum(a, b)
+    return np.unique(key), key
+
+
+def _edge_keys(L, ev):
+    ev = np.asarray(ev, dtype=np.int64)
+    return np.minimum(ev[:, 0], ev[:, 1]) * L.n_points + np.maximum(ev[:, 0], ev[:, 1])
+
+
+@pytest.mark.parametrize("name", ["suzanne", "mixed", "uv_sphere", "delaunay", "tri_grid"])
+@pytest.mark.parametrize("r", [1, 2, 5])
+def test_lattice_edges_equal_hashed_edges(name, r):
+    V, F = {"suzanne": P.suzanne, "mixed": P.mixed_mesh, "uv_sphere": lambda: P.uv_sphere(8, 6),
+            "delaunay": lambda: P.delaunay_patch(30, 3),
+            "tri_grid": lambda: P.grid(4, 4, kind="tri")}[name]()
+    L = BlendingSurface(V, F).stencil(r).lattice
+    res = L.edges()
+    if res is None:  # only quads at resolution 1 (a diagonal may be shared)
+        assert r == 1 and np.any(L.topology.face_sizes == 4)
+        return
+    ev, ce = res
+    want, corner_keys = _hashed_edges(L)
+    got = _edge_keys(L, ev)
+    assert len(np.unique(got)) == len(got)  # no edge twice
+    assert np.array_equal(np.sort(got), want)  # every triangle edge, nothing else
+    assert np.array_equal(got[ce], corner_keys)  # corner i -> i+1 of every triangle
+
+
+def test_lattice_edges_merge_the_repeats_at_an_interior_valence_2_vertex():
+    # vertex 1 is interior with valence 2: both quads have it at corner 1, whose lattice
+    # diagonal joins the same two edge samples in both faces
+    from gerbs_core.mesh_topology import MeshTopology
+    L = Lattice(MeshTopology([[0, 1, 2, 3], [2, 1, 0, 4]], 5), 3)
+    ev, ce = L.edges()
+    want, corner_keys = _hashed_edges(L)
+    got = _edge_keys(L, ev)
+    # 3 segments per mesh edge + per quad at r = 3: 2 x 6 inner grid edges + 9 diagonals
+    naive = L.topology.n_edges * 3 + 2 * (12 + 9)
+    assert len(got) == len(want) == naive - 1  # the repeat was merged, nothing else
+    assert np.array_equal(np.sort(got), want) and np.array_equal(got[ce], corner_keys)
+
+
+def test_stencil_rows_have_sorted_columns_and_no_stored_zeros_beyond_the_locality():
+    V, F = P.mixed_mesh(bend=0.5)
+    for mode in ("regular", "metric"):
+        W = BlendingSurface(V, F, mode=mode).stencil(4).matrix
+        rows = np.repeat(np.arange(W.shape[0]), np.diff(W.indptr))
+        same_row = rows[1:] == rows[:-1]
+        assert np.all(np.diff(W.indices)[same_row] > 0)  # strictly increasing per row
