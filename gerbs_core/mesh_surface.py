@@ -35,9 +35,12 @@ from .stencil import Stencil, assemble_csr
 
 __all__ = ["BlendingSurface"]
 
-# bytes of working memory per (sample x face corner), calibrated on tracemalloc peaks
-# (Suzanne, 124k points: 228 MB measured, 305 MB estimated)
-_BYTES_PER_CORNER_SAMPLE = 400
+# memory model of a tessellation / stencil, calibrated on tracemalloc peaks (Suzanne,
+# icosphere(3), UV sphere, mixed mesh; 10k..1M points; scripts/measure_memory.py):
+# peak ~ P (~450 B + 12 B per non-zero of W) + the chunked working set (~20 MB)
+_BYTES_PER_SAMPLE = 700  # points, normals, lattice and per-sample arrays (with margin)
+_BYTES_PER_NNZ = 12  # W: float64 data + int32 index
+_CHUNK_BYTES = 48e6  # working arrays of one chunk (~200000 sample x corner terms)
 
 
 def _points(name, a, V=None):
@@ -391,15 +394,35 @@ class BlendingSurface:
         self._evaluate_flat(lat.local_face, x, 0)
         return self._last_eps0
 
-    def _nnz_estimate(self):
-        return int(self.topology.face_sizes.max() * (1 + self.fits.ids.shape[1]))
+    def _require_cover(self, eps: float) -> None:
+        """Refuse to return a surface with holes: where every psi_v underflows to 0
+        the rational form Psi = psi / sum psi is 0/0 (NaN). Happens for kernels whose
+        1 - F(t) underflows well before t = 1 (e.g. ERBS(gamma=7.389, lam=0, sigma=0))."""
+        if not eps > 0.0:
+            raise InvalidParameterError(
+                "kernel", f"{self.kernel!r} leaves holes in the cover: every size function "
+                f"psi_v = 1 - F(g_v) is 0 at some samples (1 - F(t) underflows for t < 1); "
+                f"use a kernel whose F reaches 1 only near t = 1")
+
+    def _nnz_estimate(self) -> float:
+        """Non-zeros per row of W, an upper bound on average: the corners of a face
+        times (1 + fit data per vertex), no sharing counted (measured 1.8-2.6x the
+        real count on Suzanne, spheres, the mixed mesh)."""
+        n = float(np.mean(self.topology.face_sizes))
+        return n * (1.0 + float(np.mean((self.fits.ids >= 0).sum(axis=1))))
+
+    def memory_estimate(self, resolution: int) -> int:
+        """Bytes a tessellation or stencil at `resolution` is expected to need at peak
+        (an upper bound: measured peaks are 0.4-0.7x of it from 10k to 1M points)."""
+        from .tessellation import output_counts
+        P, _ = output_counts(self.topology, resolution)
+        return int(P * (_BYTES_PER_SAMPLE + _BYTES_PER_NNZ * self._nnz_estimate()) + _CHUNK_BYTES)
 
     def lattice(self, resolution: int):
         """The sample lattice at `resolution` (checked against the memory budget)."""
         from .tessellation import Lattice, output_counts
         P, T = output_counts(self.topology, resolution)
-        n = float(np.mean(self.topology.face_sizes))
-        est = int(P * (n * _BYTES_PER_CORNER_SAMPLE + 12 * self._nnz_estimate()))
+        est = self.memory_estimate(resolution)
         if est > self.memory_budget:
             raise ResourceLimitError(f"resolution {resolution}: {P} points, estimated memory "
                                      f"{est / 1e6:.0f} MB exceeds the budget "
@@ -424,6 +447,7 @@ class BlendingSurface:
         if np.any((f < 0) | (f >= self.topology.n_faces)):
             raise InvalidParameterError("face_index", "out of range")
         out = self._evaluate_flat(f, x.reshape(-1, 2), nu)[nu]
+        self._require_cover(self._last_eps0)
         return out.reshape(x.shape[:-1] + out.shape[1:])
 
     def partition(self, face_index, local_coords, nu: int = 0):
@@ -524,6 +548,7 @@ class BlendingSurface:
         lat = self.lattice(resolution)
         x = lat.map_to_polygon(self.shapes.corners)
         S, dS = self._evaluate_flat(lat.face, x, 1)
+        self._require_cover(self._last_eps0)
         nrm = np.cross(dS[..., 0], dS[..., 1])
         vs = lat.vertex_sample
         if self.degree >= 1:
@@ -583,5 +608,6 @@ class BlendingSurface:
             eps = min(eps, float(mx[sel >= 0].min()))
             blocks.append((faces, sel, u, Psi[0], mono[0]))
         self._last_eps0 = eps
+        self._require_cover(eps)
         W = assemble_csr(blocks, ids, coef, lat.n_points, self.topology.n_vertices)
         return Stencil(W, lat.triangles, lat.vertex_sample, lat)  # read-only, not copied

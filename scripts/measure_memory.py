@@ -108,8 +108,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--points", type=int, default=1_000_000)
     ap.add_argument("--mesh", default="suzanne", choices=["suzanne", "grid"])
-    ap.add_argument("--budget", type=float, default=8e9,
-                    help="memory_budget in bytes (the default 2e9 refuses ~1M points on Suzanne)")
+    ap.add_argument("--budget", type=float, default=2e9,
+                    help="memory_budget in bytes (default: BlendingSurface's default, 2e9)")
     ap.add_argument("--child", nargs=2, metavar=("STAGE", "TRACE"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:

@@ -25,10 +25,11 @@ Case counts are fixed by ``max_examples`` (and printed with -s): 360 + 120
 generated cases here, on top of the 4,000 of test_mesh_validation_properties.
 """
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, Phase, event, given, settings
 from hypothesis import strategies as st
 
-from gerbs_core import BlendingSurface, primitives
+from gerbs_core import BlendingSurface, InvalidParameterError, primitives
 from gerbs_core.kernels import BFBS, ERBS, LogisticStep
 
 SETTINGS = dict(deadline=None, derandomize=True, database=None,
@@ -36,15 +37,13 @@ SETTINGS = dict(deadline=None, derandomize=True, database=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 N_SURFACE_CASES = 360
 N_KERNEL_CASES = 120
+N_WIDE_CASES = 60
 
-# ERBS parameters drawn from the guaranteed box (docs/robustness.md). Outside it lies
-# a KNOWN BUG of gerbs_core/mesh_surface.py (patch with the lead): kernels whose
-# 1 - F(t) underflows to 0 long before t = 1 leave holes in the cover and the surface
-# is silently NaN there instead of an InvalidParameterError("kernel"). Minimal
-# reproducer: BlendingSurface(*primitives.mixed_mesh(0.7),
-#     kernel=ERBS(gamma=7.389, lam=0.0, sigma=0.0)).tessellate(2) -> NaN points.
-# Re-include alpha, gamma up to 10 and beta up to 100 once that is fixed (then such
-# kernels must raise, which check_surface would have to accept).
+# ERBS parameters drawn from the guaranteed box (docs/robustness.md). Outside it, a
+# kernel either works, is refused at construction (untabulable), or -- where
+# 1 - F(t) underflows to 0 long before t = 1 -- leaves holes in the cover, which
+# BlendingSurface refuses with InvalidParameterError("kernel") (it returned NaN
+# points before): test_wide_erbs_parameters_work_or_raise_the_specific_error.
 ERBS_BOX = dict(alpha=(0.1, 1.0), beta=(0.01, 10.0), gamma=(0.1, 1.0), sigma=(0.0, 10.0))
 
 
@@ -109,14 +108,20 @@ def valid_meshes(draw):
     return kind, v, f
 
 
-def erbs_kernels():
-    def make(a, b, c, lam, s):
-        return ERBS(alpha=a, beta=b, gamma=c, lam=lam, sigma=s)
+ERBS_WIDE = dict(alpha=(0.1, 10.0), beta=(0.01, 100.0), gamma=(0.1, 10.0), sigma=(0.0, 10.0))
+
+
+def erbs_params(box=ERBS_BOX):
     logu = lambda lo, hi: st.floats(np.log(lo), np.log(hi)).map(  # noqa: E731
         lambda x: float(np.round(np.exp(x), 3)))
-    return st.builds(make, logu(*ERBS_BOX["alpha"]), logu(*ERBS_BOX["beta"]),
-                     logu(*ERBS_BOX["gamma"]), st.floats(0.0, 1.0).map(lambda x: round(x, 3)),
-                     st.floats(*ERBS_BOX["sigma"]).map(lambda x: round(x, 3)))
+    return st.tuples(logu(*box["alpha"]), logu(*box["beta"]), logu(*box["gamma"]),
+                     st.floats(0.0, 1.0).map(lambda x: round(x, 3)),
+                     st.floats(*box["sigma"]).map(lambda x: round(x, 3)))
+
+
+def erbs_kernels():
+    return erbs_params().map(lambda p: ERBS(alpha=p[0], beta=p[1], gamma=p[2], lam=p[3],
+                                            sigma=p[4]))
 
 
 def kernels():
@@ -186,6 +191,45 @@ def test_random_erbs_parameters_on_the_mixed_mesh(kernel, degree, mode, seed):
     X, faces = primitives.mixed_mesh(0.7)
     surface = BlendingSurface(X, faces, degree=degree, kernel=kernel, mode=mode)
     check_surface(surface, np.asarray(X, float), 2, np.random.default_rng(seed))
+
+
+@settings(max_examples=N_WIDE_CASES, **SETTINGS)
+@given(erbs_params(ERBS_WIDE), st.sampled_from(["regular", "metric"]), st.integers(0, 2**31 - 1))
+def test_wide_erbs_parameters_work_or_raise_the_specific_error(params, mode, seed):
+    """Outside the guaranteed box every ERBS parameter set either gives a valid
+    surface (all checks) or raises InvalidParameterError naming the parameter
+    (untabulable set) or the kernel (holes in the cover) -- never NaN points."""
+    X, faces = primitives.mixed_mesh(0.7)
+    try:
+        kernel = ERBS(*params)
+    except InvalidParameterError as e:
+        event("refused by ERBS")
+        assert e.name in ("alpha", "beta", "gamma", "lam", "sigma")
+        return
+    surface = BlendingSurface(X, faces, kernel=kernel, mode=mode)
+    if not surface.eps0 > 0.0:
+        # holes between the samples of a coarse tessellation: eps0 reports them, and
+        # a tessellation that samples them (the check lattice's resolution) refuses
+        event("holes in the cover: eps0 = 0, refused where sampled")
+        with pytest.raises(InvalidParameterError, match="holes in the cover"):
+            surface.tessellate(surface._eps0_resolution)
+        return
+    try:
+        check_surface(surface, np.asarray(X, float), 2, np.random.default_rng(seed))
+    except InvalidParameterError as e:
+        event("holes in the cover: refused")
+        assert e.name == "kernel" and "holes in the cover" in str(e)
+        return
+    event("valid surface")
+
+
+def test_a_kernel_leaving_holes_is_refused_not_nan():
+    """The reproducer of the former silent-NaN bug: every entry point refuses."""
+    X, faces = primitives.mixed_mesh(0.7)
+    s = BlendingSurface(X, faces, kernel=ERBS(gamma=7.389, lam=0.0, sigma=0.0))
+    for call in (lambda: s.tessellate(2), lambda: s.stencil(2)):
+        with pytest.raises(InvalidParameterError, match="holes in the cover"):
+            call()
 
 
 def test_the_checks_catch_a_broken_surface():
