@@ -190,3 +190,25 @@ def test_remove_through_blender_operator_cleans_up(blender):
     bpy.ops.object.modifier_remove(modifier=mod.name)
     evaluated(obj)
     assert not [o for o in bpy.data.objects if o.get("gerbs_result")]
+
+
+@pytest.mark.parametrize("kind", ["suzanne", "grid", "mixed", "icosphere"])
+@pytest.mark.parametrize("r", [1, 3])
+def test_result_mesh_edges_are_valid(blender, kind, r):
+    """The result mesh's edges are written from the lattice (not by Blender's edge
+    hashing): Blender's validate() finds nothing to fix and calc_edges adds nothing."""
+    from blender_addon import api
+    from blender_addon import geometry_nodes as gn
+
+    obj = make_object(kind)
+    api.add_surface(obj, resolution=r)
+    mesh = gn.get_result(obj.modifiers[-1]).data
+    n = len(mesh.edges)
+    assert n > 0
+    copy = mesh.copy()
+    try:
+        assert not copy.validate(verbose=False)  # no repeated or invalid edge
+        copy.update(calc_edges=True)  # Blender's own edge hashing finds no missing edge
+        assert len(copy.edges) == n
+    finally:
+        bpy.data.meshes.remove(copy)
