@@ -172,11 +172,11 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
         A = np.concatenate(A, axis=1)
         B = np.concatenate(B, axis=1)
         W = np.concatenate(W, axis=1)
-        AW = A * W[:, :, None]
-        G = np.einsum("ckm,ckl->cml", AW, A, optimize=True)
+        AWt = np.transpose(A * W[:, :, None], (0, 2, 1))                      # (c, M, K)
+        G = np.matmul(AWt, A)  # batched normal equations (matmul: ~2.5x einsum here)
         tr = np.trace(G, axis1=1, axis2=2)
         G += (1e-12 * tr / M)[:, None, None] * np.eye(M)
-        c = np.linalg.solve(G, np.einsum("ckm,ckv->cmv", AW, B, optimize=True))   # (c, M, V)
+        c = np.linalg.solve(G, np.matmul(AWt, B))                              # (c, M, V)
         out_coeffs[:, s:e, :] = (c / h[:, None, None] ** order[None, :, None]).transpose(1, 0, 2)
     return tensors_from_coeffs(list(out_coeffs), alphas, n, fit_degree)
 
