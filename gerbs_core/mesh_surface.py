@@ -224,7 +224,8 @@ class BlendingSurface:
                   + (r * uu[2])[..., None, None] * o(dt, dt) + (r * uu[1])[..., None, None] * Ht)
             psi.append(-dF[2][..., None, None] * o(dg, dg) - dF[1][..., None, None] * Hg)
         S0 = psi[0].sum(axis=0)
-        Psi = [psi[0] / S0]
+        with np.errstate(invalid="ignore"):  # 0/0 only in holes of the cover: refused later
+            Psi = [psi[0] / S0]
         if nu >= 1:
             S1 = psi[1].sum(axis=0)
             Psi.append((psi[1] - Psi[0][..., None] * S1) / S0[..., None])
@@ -323,7 +324,9 @@ class BlendingSurface:
             if mono_tab is not None:
                 mono.append((mono_tab, mono_inv[part]))
         S0 = psi.sum(axis=0)
-        return self.topology.face_vertices[corners], [psi / S0], [mono], psi.max(axis=0)
+        with np.errstate(invalid="ignore"):  # 0/0 only in holes of the cover: refused later
+            Psi = psi / S0
+        return self.topology.face_vertices[corners], [Psi], [mono], psi.max(axis=0)
 
     def _template_blocks(self, lat):
         """Yield (n, faces, sel, xt, class_faces, part, per) per block of faces of one
