@@ -109,6 +109,7 @@ def assemble_csr(blocks, ids, coef, n_points: int, n_vertices: int) -> sp.csr_ma
     N = ids.shape[1]
     K = 1 + N
     M = coef.shape[1]
+    col_dtype = np.int32 if n_vertices < np.iinfo(np.int32).max else np.int64  # W's indices
     # pass 1: the local columns L of every face and its count c; faces sorted by c
     prep = []
     n_rows = nnz = 0
@@ -117,7 +118,7 @@ def assemble_csr(blocks, ids, coef, n_points: int, n_vertices: int) -> sp.csr_ma
         cand = np.concatenate([u[:, :, None], ids[u]], axis=2)  # (n, F, 1+N)
         L, pos = _local_columns(np.transpose(cand, (1, 0, 2)).reshape(F, n * K))
         cnt = (L >= 0).sum(axis=1)  # valid local columns of each face: 0 .. cnt-1
-        L = L.astype(np.int32 if n_vertices < 2 ** 31 - 1 else np.int64)
+        L = L.astype(col_dtype)
         order = np.argsort(cnt, kind="stable")
         cs = cnt[order]
         cuts = np.flatnonzero(np.diff(cs)) + 1
@@ -127,7 +128,7 @@ def assemble_csr(blocks, ids, coef, n_points: int, n_vertices: int) -> sp.csr_ma
         nnz += sel.shape[1] * int(cnt.sum())
     idx_dtype = np.int32 if max(nnz, n_vertices) < np.iinfo(np.int32).max else np.int64
     data = np.empty(nnz)
-    indices = np.empty(nnz, dtype=np.int32 if n_vertices < 2 ** 31 - 1 else np.int64)
+    indices = np.empty(nnz, dtype=col_dtype)
     lens = np.empty(n_rows, dtype=idx_dtype)
     owner = np.full(n_points, -1, dtype=idx_dtype)  # assembly row of each sample
     # pass 2: rows = [Psi_k mono_k, Psi_k]_k @ C per face: l_{u_k} = X_u + mono . A

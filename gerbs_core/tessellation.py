@@ -317,18 +317,26 @@ class Lattice:
                              np.diff(self.local_offsets)))
 
     # per-sample and local-table parameters are made on first use (the stencil of a
-    # mode "regular" surface needs neither)
-    @cached_property
+    # mode "regular" surface needs neither); each pair is built together
+    @property
     def uv(self) -> np.ndarray:
-        self._params()
-        return self.__dict__["uv"]
+        return self._sample_params[0]
+
+    @property
+    def fan(self) -> np.ndarray:
+        return self._sample_params[1]
+
+    @property
+    def local_uv(self) -> np.ndarray:
+        return self._local_params[0]
+
+    @property
+    def local_fan(self) -> np.ndarray:
+        return self._local_params[1]
 
     @cached_property
-    def fan(self) -> np.ndarray:
-        self._params()
-        return self.__dict__["fan"]
-
-    def _params(self):
+    def _sample_params(self):
+        """(uv (P, 2), fan (P,)) of every output sample."""
         uv_g = np.empty((self.n_points, 2))
         fan_g = np.empty(self.n_points, dtype=np.int64)
         for fk, G, own, n in self._parts:
@@ -336,19 +344,11 @@ class Lattice:
             sel = G[own]
             fan_g[sel] = np.broadcast_to(fan, G.shape)[own]
             uv_g[sel] = np.broadcast_to(uv, G.shape + (2,))[own]
-        self.__dict__["uv"], self.__dict__["fan"] = _ro(uv_g), _ro(fan_g)
+        return _ro(uv_g), _ro(fan_g)
 
     @cached_property
-    def local_uv(self) -> np.ndarray:
-        self._local_params()
-        return self.__dict__["local_uv"]
-
-    @cached_property
-    def local_fan(self) -> np.ndarray:
-        self._local_params()
-        return self.__dict__["local_fan"]
-
     def _local_params(self):
+        """(local_uv (L, 2), local_fan (L,)) of every lattice point of every face."""
         L = len(self.local_face)
         uv_l = np.empty((L, 2))
         fan_l = np.empty(L, dtype=np.int64)
@@ -358,7 +358,7 @@ class Lattice:
             dest = (lo[fk][:, None] + np.arange(G.shape[1])).ravel()
             uv_l[dest] = np.tile(uv, (len(fk), 1))
             fan_l[dest] = np.tile(fan, len(fk))
-        self.__dict__["local_uv"], self.__dict__["local_fan"] = _ro(uv_l), _ro(fan_l)
+        return _ro(uv_l), _ro(fan_l)
 
     def edges(self):
         """(edge_verts (E_out, 2), corner_edges (T, 3)) int32 of the output triangle mesh,
