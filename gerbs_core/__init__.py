@@ -34,14 +34,14 @@ _LAZY = {
     "Step": "kernels",
     "CustomCDF": "kernels",
     # univariate GERBS splines (DESIGN section 2)
-    "GERBSBasis": "curves",
-    "GERBSCurve": "curves",
+    "GERBSBasis": "splines",
+    "GERBSCurve": "splines",
     # smooth star gauge (DESIGN section 4)
-    "RadialEnvelope": "envelope",
+    "RadialEnvelope": "gauge",
     "StarGauge": "gauge",
     # scattered points in R^n (DESIGN sections 3-4)
-    "GERBSInterpolator": "hermite",
-    "cover_report": "diagnostics",
+    "GERBSInterpolator": "scattered",
+    "cover_report": "scattered",
     # polygon-mesh blending surfaces (DESIGN section 5)
     "MeshTopology": "mesh_topology",
     "validate_geometry": "mesh_topology",

@@ -292,7 +292,7 @@ def clear_envelope_cache() -> None:
 
 def build_envelopes(topo, charts: VertexCharts, corners2d, kappa=0.8, shrink=0.95,
                     exact=False, kernel=None):
-    """Smooth star envelopes (:class:`gerbs_core.envelope.RadialEnvelope`) of all charts.
+    """Smooth star envelopes (:class:`gerbs_core.gauge.envelope.RadialEnvelope`) of all charts.
 
     Returns (envelopes (list), corner_envelope (C,) int, corner_offset (C,)): the
     envelope serving each corner's sector, evaluated at theta - corner_offset.
@@ -302,7 +302,7 @@ def build_envelopes(topo, charts: VertexCharts, corners2d, kappa=0.8, shrink=0.9
     Stars of the same shape up to rotation (e.g. equal valence and
     face sizes in mode "regular") share one object.
     """
-    from .envelope import RadialEnvelope
+    from .gauge.envelope import RadialEnvelope
     cache, envs = {}, []
     corner_env = np.full(topo.n_corners, -1, dtype=np.int64)
     env_offset = np.zeros(topo.n_corners)

@@ -37,8 +37,8 @@ from scipy.interpolate import CloughTocher2DInterpolator, LinearNDInterpolator, 
 from scipy.spatial import Delaunay  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
-from gerbs_core.franke import franke  # noqa: E402
-from gerbs_core.hermite import GERBSInterpolator  # noqa: E402
+from gerbs_core.datasets.franke import franke  # noqa: E402
+from gerbs_core.scattered.hermite import GERBSInterpolator  # noqa: E402
 
 
 def methods(P, k):

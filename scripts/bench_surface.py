@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from gerbs_core import primitives as P  # noqa: E402
+from gerbs_core.datasets import primitives as P  # noqa: E402
 from gerbs_core.charts import clear_envelope_cache  # noqa: E402
 from gerbs_core.mesh_surface import BlendingSurface  # noqa: E402
 

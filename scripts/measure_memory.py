@@ -30,7 +30,7 @@ sys.path.insert(0, str(ROOT))  # this checkout's gerbs_core
 
 
 def _mesh(name):
-    from gerbs_core import primitives
+    from gerbs_core.datasets import primitives
 
     if name == "suzanne":
         return primitives.suzanne()

@@ -43,7 +43,7 @@ ALL_FIGURES = BLENDER_FIGURES + PLOT_FIGURES
 
 
 def _suzanne():
-    from gerbs_core.primitives import suzanne
+    from gerbs_core.datasets.primitives import suzanne
 
     v, f = suzanne()
     v = np.asarray(v, dtype=np.float64)
@@ -52,13 +52,13 @@ def _suzanne():
 
 
 def _icosphere():
-    from gerbs_core.primitives import icosphere
+    from gerbs_core.datasets.primitives import icosphere
 
     return icosphere(1)
 
 
 def _mixed():
-    from gerbs_core.primitives import mixed_mesh
+    from gerbs_core.datasets.primitives import mixed_mesh
 
     return mixed_mesh(bend=1.6)
 
@@ -72,7 +72,7 @@ WIRE_SCENES = {
 
 
 def _icosahedron():
-    from gerbs_core.primitives import icosphere
+    from gerbs_core.datasets.primitives import icosphere
 
     return icosphere(0)
 

@@ -46,7 +46,7 @@ def classify(params, X, faces, grid):
 
 
 def main() -> None:
-    from gerbs_core import primitives
+    from gerbs_core.datasets import primitives
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="3 values per parameter")

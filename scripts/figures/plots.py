@@ -106,7 +106,7 @@ def _colouring(tri, n, ncolours):
 def basis_functions(points, x):
     """All B_i = Psi_i (eq. (73), the default minimal basis) of the Delaunay star-1 cover
     at x (..., 2) -> (..., N), from the interpolator's dense basis matrix."""
-    from gerbs_core.hermite import GERBSInterpolator
+    from gerbs_core.scattered.hermite import GERBSInterpolator
 
     x = np.asarray(x, dtype=np.float64)
     interp = GERBSInterpolator(points, np.zeros(len(points)), cover="delaunay")

@@ -38,7 +38,7 @@ def make_object(kind: str):
         bpy.ops.mesh.primitive_grid_add(x_subdivisions=5, y_subdivisions=4, size=2.0)
         obj = bpy.context.active_object
     elif kind == "mixed":
-        from gerbs_core.primitives import mixed_mesh
+        from gerbs_core.datasets.primitives import mixed_mesh
         obj = link_object("mixed", *mixed_mesh())
     else:
         raise ValueError(kind)

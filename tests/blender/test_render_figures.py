@@ -83,7 +83,7 @@ def test_zebra_claim_normals_agree_across_edges_only_for_the_smooth_gauge():
     """What zebra_kinked.png shows, measured: the normals that the two faces of an edge
     give to the same sample agree for GERBS and jump for the exact (kinked) gauge."""
     from figures import gerbs
-    from gerbs_core.primitives import icosphere
+    from gerbs_core.datasets.primitives import icosphere
 
     v, f = icosphere(0)
     smooth = gerbs.tessellate_split(v, f, 8)

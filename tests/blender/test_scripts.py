@@ -49,7 +49,7 @@ def test_main_job_obj_output_is_the_surface(blender, tmp_path):
     (obj,) = bpy.context.selected_objects
     # expected from the core directly (no Blender in the loop)
     from gerbs_core.mesh_surface import BlendingSurface
-    from gerbs_core.primitives import suzanne
+    from gerbs_core.datasets.primitives import suzanne
     X, F = suzanne()
     P = BlendingSurface(X, F, degree=3).tessellate(2)[0]
     Q = positions(obj.data)

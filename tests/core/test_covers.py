@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from gerbs_core import GERBSInterpolator
-from gerbs_core.diagnostics import cover_report
+from gerbs_core.scattered.diagnostics import cover_report
 
 RNG = np.random.default_rng(7)
 
@@ -173,8 +173,8 @@ def test_ball_cover_supports_and_guaranteed_thickness(n):
 def test_batched_exact_gauge_matches_gauge_module():
     """The batched planar gauge (covers.PlanarStarCover) and gauge.StarGauge compute
     the same psi, gradient and Hessian for the exact polygon radius."""
-    from gerbs_core.covers import polygon_cover
-    from gerbs_core.gauge import StarGauge
+    from gerbs_core.scattered.covers import polygon_cover
+    from gerbs_core.gauge.star import StarGauge
     from gerbs_core.kernels import ERBS
     c = np.array([[0.1, 0.2]])
     ang = np.sort(RNG.random(7)) * 2 * np.pi
@@ -217,7 +217,7 @@ def test_envelope_bounds_dense_on_a_large_cover():
     """kappa shrink rho <= rho~ <= shrink rho at 64 angles on every edge of the
     Delaunay stars of 2000 random points (thin hull triangles and nearly radial
     edges included): the transition widths are certified, not sampled."""
-    from gerbs_core.covers import delaunay_cover
+    from gerbs_core.scattered.covers import delaunay_cover
     from gerbs_core.kernels import ERBS
     P = np.random.default_rng(11).random((2000, 2))
     cov, _, _ = delaunay_cover(P, ERBS())

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from gerbs_core import primitives as P
+from gerbs_core.datasets import primitives as P
 from gerbs_core.errors import InvalidMeshError, InvalidParameterError
 from gerbs_core.face_shapes import cyclic_polygon, face_shapes
 from gerbs_core.mesh_topology import MeshTopology

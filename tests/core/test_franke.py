@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from gerbs_core.errors import InvalidParameterError
-from gerbs_core.franke import franke
+from gerbs_core.datasets.franke import franke
 
 RNG = np.random.default_rng(5)
 

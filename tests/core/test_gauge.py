@@ -1,4 +1,4 @@
-"""Tests of the smooth star gauge (gerbs_core.envelope / gerbs_core.gauge).
+"""Tests of the smooth star gauge (gerbs_core.gauge.envelope / gerbs_core.gauge).
 
 DESIGN sections 4-5: rho~ is a C-infinity lower envelope of the exact radius
 with kappa * shrink * rho <= rho~ <= shrink * rho; psi = b(|y| / rho~) is
@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from gerbs_core.envelope import RadialEnvelope
+from gerbs_core.gauge.envelope import RadialEnvelope
 from gerbs_core.errors import InvalidParameterError, InvalidPointSetError
-from gerbs_core.gauge import StarGauge
+from gerbs_core.gauge.star import StarGauge
 from gerbs_core.kernels import ERBS
 
 KAPPA, SHRINK = 0.8, 0.95
@@ -407,7 +407,7 @@ def test_transition_width_certificates_hold_densely(kern):
     points per transition for random corners, nearly radial edges included,
     for symmetric and asymmetric kernels (lam != 1/2: F(1 - w) != 1 - F(w), so
     side B needs the mirrored profile)."""
-    from gerbs_core._envelope_build import blend_check, closed_form_fit, fit_blend_widths
+    from gerbs_core.gauge._envelope_build import blend_check, closed_form_fit, fit_blend_widths
     rng = np.random.default_rng(4)
     n = 400
     nA = rng.uniform(-1.55, 1.2, n)
@@ -454,7 +454,7 @@ def test_mesh_envelopes_stay_inside_the_star_for_asymmetric_kernels(lam):
     the surface interpolates (regression: the side-B width certificate once assumed
     a symmetric kernel; ERBS(lam=1) then gave rho~/rho up to 1.26 and missed the
     vertices by 0.27)."""
-    from gerbs_core import primitives as P
+    from gerbs_core.datasets import primitives as P
     from gerbs_core.mesh_surface import BlendingSurface
     V, F = P.mixed_mesh(0.7)
     s = BlendingSurface(V, F, kernel=ERBS(lam=lam), degree=0)

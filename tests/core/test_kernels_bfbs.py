@@ -6,7 +6,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.special import betainc
 
-from gerbs_core.curves import GERBSBasis
+from gerbs_core.splines.curves import GERBSBasis
 from gerbs_core.errors import InvalidParameterError
 from gerbs_core.kernels import BFBS, ERBS, Affine, LogisticStep
 

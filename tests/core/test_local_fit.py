@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from gerbs_core import primitives as P
+from gerbs_core.datasets import primitives as P
 from gerbs_core.charts import vertex_charts
 from gerbs_core.errors import InvalidParameterError
 from gerbs_core.face_shapes import face_shapes

@@ -16,7 +16,8 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from gerbs_core import BlendingSurface, primitives
+from gerbs_core import BlendingSurface
+from gerbs_core.datasets import primitives
 from gerbs_core.errors import GERBSValueError, ResourceLimitError
 from gerbs_core.tessellation import output_counts
 

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from gerbs_core import primitives as P
+from gerbs_core.datasets import primitives as P
 from gerbs_core.errors import InvalidMeshError, InvalidParameterError, ResourceLimitError
 from gerbs_core.mesh_surface import BlendingSurface
 from gerbs_core.tessellation import Lattice, output_counts

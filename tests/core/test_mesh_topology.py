@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from gerbs_core import MeshTopology, primitives
+from gerbs_core import MeshTopology
+from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError
 from gerbs_core.mesh_topology import validate_geometry
 

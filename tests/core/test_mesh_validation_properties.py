@@ -21,7 +21,7 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from gerbs_core import primitives
+from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError
 from gerbs_core.mesh_topology import MeshTopology, validate_geometry
 

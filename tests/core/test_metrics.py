@@ -5,7 +5,7 @@ import pytest
 
 from gerbs_core.errors import InvalidParameterError
 from gerbs_core.kernels import ERBS
-from gerbs_core.metrics import L1, Bounded, Euclidean, LInf, Lp, QuasiNorm, as_metric
+from gerbs_core.scattered.metrics import L1, Bounded, Euclidean, LInf, Lp, QuasiNorm, as_metric
 
 K = ERBS()
 RNG = np.random.default_rng(3)

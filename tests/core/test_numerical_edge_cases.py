@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from gerbs_core import BlendingSurface, primitives
+from gerbs_core import BlendingSurface
+from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError, InvalidParameterError
 from gerbs_core.kernels import BFBS, ERBS, Affine, CustomCDF, LogisticStep, Step
 

@@ -3,10 +3,10 @@ import numpy as np
 import pytest
 
 from gerbs_core.kernels import ERBS
-from gerbs_core.metrics import Euclidean
-from gerbs_core.partition import (basis_33, basis_35, basis_36, general_basis, jmul, jrecip,
+from gerbs_core.scattered.metrics import Euclidean
+from gerbs_core.scattered.partition import (basis_33, basis_35, basis_36, general_basis, jmul, jrecip,
                                   minimal_basis, normalize)
-from gerbs_core.radii import auto_R, auto_rho
+from gerbs_core.scattered.radii import auto_R, auto_rho
 
 K = ERBS()
 RNG = np.random.default_rng(21)

@@ -1,11 +1,11 @@
-"""Test meshes (gerbs_core.primitives) and the OBJ reader/writer (gerbs_core.obj_io)."""
+"""Test meshes (gerbs_core.datasets.primitives) and the OBJ reader/writer (gerbs_core.datasets.obj)."""
 import numpy as np
 import pytest
 
-from gerbs_core import primitives
+from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError, InvalidParameterError
 from gerbs_core.mesh_topology import MeshTopology, validate_geometry
-from gerbs_core.obj_io import parse_obj, read_obj, write_obj
+from gerbs_core.datasets.obj import parse_obj, read_obj, write_obj
 
 
 def _face_normals(v, topo):

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from gerbs_core.errors import InvalidParameterError, InvalidPointSetError
-from gerbs_core.metrics import L1, Bounded, Euclidean, LInf, Lp, QuasiNorm
-from gerbs_core.radii import auto_R, auto_rho, check_points, nearest_distances, validate_radii
+from gerbs_core.scattered.metrics import L1, Bounded, Euclidean, LInf, Lp, QuasiNorm
+from gerbs_core.scattered.radii import auto_R, auto_rho, check_points, nearest_distances, validate_radii
 from scipy.spatial import Delaunay
 
 RNG = np.random.default_rng(11)

@@ -11,7 +11,7 @@ samples of faces with a vertex in the 3-ring of w can change.
 import numpy as np
 import pytest
 
-from gerbs_core import primitives as P
+from gerbs_core.datasets import primitives as P
 from gerbs_core.mesh_surface import BlendingSurface
 from gerbs_core.tessellation import Lattice
 

@@ -7,8 +7,8 @@ tessellation samples. The full table up to N = 6400 is in scripts/bench_surface.
 """
 import numpy as np
 
-from gerbs_core import primitives as P
-from gerbs_core.franke import franke as franke_function
+from gerbs_core.datasets import primitives as P
+from gerbs_core.datasets.franke import franke as franke_function
 from gerbs_core.mesh_surface import BlendingSurface
 
 

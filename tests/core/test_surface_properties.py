@@ -29,7 +29,8 @@ import pytest
 from hypothesis import HealthCheck, Phase, event, given, settings
 from hypothesis import strategies as st
 
-from gerbs_core import BlendingSurface, InvalidParameterError, primitives
+from gerbs_core import BlendingSurface, InvalidParameterError
+from gerbs_core.datasets import primitives
 from gerbs_core.kernels import BFBS, ERBS, LogisticStep
 
 SETTINGS = dict(deadline=None, derandomize=True, database=None,

@@ -19,7 +19,7 @@ import math
 import numpy as np
 import pytest
 
-from gerbs_core import primitives as P
+from gerbs_core.datasets import primitives as P
 from gerbs_core.mesh_surface import BlendingSurface
 
 MESHES = {

@@ -4,7 +4,8 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from gerbs_core import MeshTopology, primitives
+from gerbs_core import MeshTopology
+from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidParameterError, ResourceLimitError
 from gerbs_core.tessellation import Lattice, output_counts
 

@@ -31,9 +31,9 @@ from typing import Sequence
 
 import numpy as np
 
-from .errors import InvalidParameterError
-from .kernels import ERBS, Kernel
-from .kernels.base import as_float_array, check_order
+from ..errors import InvalidParameterError
+from ..kernels import ERBS, Kernel
+from ..kernels.base import as_float_array, check_order
 
 __all__ = ["GERBSBasis", "GERBSCurve"]
 

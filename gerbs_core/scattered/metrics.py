@@ -35,7 +35,7 @@ import itertools
 
 import numpy as np
 
-from .errors import InvalidParameterError
+from ..errors import InvalidParameterError
 
 __all__ = ["Metric", "Euclidean", "Lp", "LInf", "L1", "QuasiNorm", "Bounded", "as_metric"]
 

@@ -1,7 +1,7 @@
 """Smooth star gauge and size function psi = b(g) (DESIGN sections 4-5, eq. (62)).
 
 For a region star-shaped with respect to its centre, with smooth lower
-envelope rho~ of its radial function (:class:`~gerbs_core.envelope.RadialEnvelope`),
+envelope rho~ of its radial function (:class:`~gerbs_core.gauge.envelope.RadialEnvelope`),
 
     g(y) = |y| / rho~(theta(y)),        psi(y) = b(g(y)) = 1 - F(g(y))  (g < 1),
 
@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from .envelope import TWO_PI, RadialEnvelope
-from .errors import InvalidParameterError
+from ..errors import InvalidParameterError
 
 __all__ = ["StarGauge", "RadialEnvelope"]
 
@@ -85,7 +85,7 @@ class StarGauge:
                 f"{scale * span!r}")
         self.scale = scale
         if kernel is None:
-            from .kernels import ERBS
+            from ..kernels import ERBS
             kernel = ERBS()
         self.kernel = kernel
         c = np.zeros(2) if center is None else np.array(center, dtype=np.float64).reshape(-1)

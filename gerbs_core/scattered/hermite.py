@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import InvalidParameterError, InvalidPointSetError
+from ..errors import InvalidParameterError, InvalidPointSetError
 from .metrics import Euclidean, as_metric
 from .partition import general_basis, minimal_basis
 from .radii import auto_R, check_points, nearest_distances, validate_radii
@@ -21,7 +21,7 @@ __all__ = ["GERBSInterpolator"]
 
 
 def _default_kernel():
-    from .kernels import ERBS
+    from ..kernels import ERBS
     return ERBS()
 
 
@@ -34,7 +34,7 @@ class GERBSInterpolator:
     values : (N, ...) data values, any trailing shape.
     gradients : (N, ..., n), optional. Hessians : (N, ..., n, n), optional.
         Derivatives not given (up to ``degree``) are estimated by local weighted
-        least squares (see :mod:`gerbs_core.taylor`): a polynomial of degree
+        least squares (see :mod:`gerbs_core.scattered.taylor`): a polynomial of degree
         ``fit_degree`` (default ``min(degree + 1, 3)``) through f(x_i) fitted to
         the ~1.8 M + 2 nearest neighbours (M unknown coefficients), weights
         (1 - (r/1.2 h)^2)^2.
@@ -47,7 +47,7 @@ class GERBSInterpolator:
           bounding box enlarged by 5 %), enlarged 2x about their sites; domain = ``domain``.
         * "balls": the general construction, psi_i = b(d(x, x_i)/R_i),
           phi_i = b(d(x, x_i)/rho_i) (39) in ``metric``; radii from
-          :mod:`gerbs_core.radii` unless given; domain = union of the supports
+          :mod:`gerbs_core.scattered.radii` unless given; domain = union of the supports
           (contains the convex hull).
     basis : "minimal" (B = Psi, (73); default for star covers), "maximal" (phi = psi,
         (67)) or "general" ((32) with phi_i Euclidean balls of radius rho_i; default
@@ -59,7 +59,7 @@ class GERBSInterpolator:
         in the interior and keeps the Taylor extrapolation error small in long thin
         hull triangles (the dominant error of degree 2 near the boundary).
     kernel : GERBS kernel (default ERBS()).
-    metric : for cover="balls": a :class:`gerbs_core.metrics.Metric` or a shorthand
+    metric : for cover="balls": a :class:`gerbs_core.scattered.metrics.Metric` or a shorthand
         ("euclidean", "linf", "l1", "bounded", p). Derivatives nu <= metric.max_nu
         (2 for Euclidean, l_p p >= 2, l_inf, l_1, bounded; 1 for 1 < p < 2; 0 for
         quasi-norms).
@@ -69,7 +69,7 @@ class GERBSInterpolator:
         Hess (..., V, n, n)]``: use the regularized Taylor coefficients of Lemma 5
         averaged over B(x_i, r_i), r_i = rho_i (Theorem 3 (iii); quasi-interpolation,
         values at x_i are then reproduced only up to O(r^(m+1))); needs degree <= 2.
-        Quadrature: see :func:`gerbs_core.taylor.averaged_taylor`.
+        Quadrature: see :func:`gerbs_core.scattered.taylor.averaged_taylor`.
     fill_value : returned outside the domain (no support covers x); default NaN.
     kappa, shrink : star gauge parameters (rho~ >= kappa shrink rho, rho~ <= shrink rho).
     exact_gauge : use the kinked exact polygon radius (tests only).

@@ -22,15 +22,15 @@ i.e. on the knot interval [t_j, t_{j+1}] (w = (theta - t_j) / (t_{j+1} - t_j))
 
 A local function is a straight line (b = 0, a = 1/q: its gauge |y| u_j is
 LINEAR in y) or a constant radius (a = 0). Three certified constructions
-(:mod:`gerbs_core._envelope_build`); the first that exists is kept (``method``):
+(:mod:`gerbs_core.gauge._envelope_build`); the first that exists is kept (``method``):
 
 * ``"blend"`` (default): the edges' own lines, pulled in by c in [kappa, 1],
   blended DIRECTLY across each corner by one GERBS transition as wide as the
   certified bound allows (up to half of each adjacent edge; collinear edges
   merged). Widest transitions: on the test meshes max |U + U''|/U 3.7-12 where
   the fillets gave 4.7-80. Certified by rigorous bounds
-  (:func:`~gerbs_core._envelope_build.closed_form_fit`,
-  :func:`~gerbs_core._envelope_build.blend_check`), not by the argument below;
+  (:func:`~gerbs_core.gauge._envelope_build.closed_form_fit`,
+  :func:`~gerbs_core.gauge._envelope_build.blend_check`), not by the argument below;
 * ``"fillet"``: exact edge lines, each corner rounded by an inscribed arc
   (knots on the rays of arc points; chords / tangents as local lines);
 * ``"constant"``: DESIGN's rule (knots at the corners, bisection while
@@ -56,7 +56,7 @@ import numpy as np
 
 from ._envelope_build import (build_blend, build_constant, build_fillet, interval_ratios,
                               line_through)
-from .errors import InvalidParameterError, InvalidPointSetError
+from ..errors import InvalidParameterError, InvalidPointSetError
 
 __all__ = ["RadialEnvelope"]
 
@@ -120,7 +120,7 @@ class RadialEnvelope:
         self.shrink = _check_unit_interval("shrink", shrink, closed_right=True)
         self.exact = bool(exact)
         if kernel is None:
-            from .kernels import ERBS
+            from ..kernels import ERBS
             kernel = ERBS()
         self.kernel = kernel
         _validate_polar(theta, radius, self.closed)

@@ -13,13 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InvalidParameterError
-from .obj_io import read_obj
+from ..errors import InvalidParameterError
+from .obj import read_obj
 
 __all__ = ["icosphere", "uv_sphere", "grid", "mixed_mesh", "delaunay_patch", "jittered_patch", "suzanne",
            "quad_patch", "ngon_ring", "fan", "SUZANNE_PATH"]
 
-SUZANNE_PATH = Path(__file__).resolve().parent.parent / "examples" / "suzanne.obj"
+SUZANNE_PATH = Path(__file__).resolve().parents[2] / "examples" / "suzanne.obj"
 
 
 def _check_int(name: str, value, lo: int) -> int:

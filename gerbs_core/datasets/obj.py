@@ -13,7 +13,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from .errors import InvalidMeshError
+from ..errors import InvalidMeshError
 
 __all__ = ["read_obj", "write_obj", "parse_obj"]
 

@@ -12,10 +12,10 @@ It follows the gauge rule of DESIGN section 4 (same as ``gauge.StarGauge``):
 * u~ = 1/rho~ is a GERBS spline in the angle whose local functions are the edges'
   own lines u_e = cos(t - nu_e)/p_e, pulled in by c_e in [kappa, 1] (0.9-0.97
   next to convex corners, as close to 1 as lets their transitions fill the room:
-  :func:`gerbs_core._envelope_build.adaptive_scales`; 1 between reflex ones),
+  :func:`gerbs_core.gauge._envelope_build.adaptive_scales`; 1 between reflex ones),
   with ONE transition per
   corner, as wide as certified (up to half of each adjacent edge, see
-  ``_subdivide`` and :func:`gerbs_core._envelope_build.blend_check`), so
+  ``_subdivide`` and :func:`gerbs_core.gauge._envelope_build.blend_check`), so
   kappa rho <= rho~ <= rho; then rho~ is scaled by ``shrink`` = 0.95. (The
   earlier rule -- constants at knots in the log-radius variable -- made rho~ a
   staircase whose derivatives jumped by O(1) within 1e-4 on the unit square.)
@@ -46,7 +46,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import Delaunay, QhullError
 
-from .errors import InvalidParameterError, InvalidPointSetError
+from ..errors import InvalidParameterError, InvalidPointSetError
 from .metrics import bump_from_t
 
 __all__ = ["PlanarStarCover", "delaunay_cover", "voronoi_cover", "polygon_cover", "padded_ball_query"]
@@ -131,7 +131,7 @@ class PlanarStarCover:
     # -- the envelope -----------------------------------------------------
     def _subdivide(self):
         """Corner transitions of the envelope (DESIGN section 4, same rule as
-        :func:`gerbs_core._envelope_build.build_blend`).
+        :func:`gerbs_core.gauge._envelope_build.build_blend`).
 
         u~ = 1/rho~ is a GERBS spline in the angle whose local functions are the
         edges' own lines u_e = cos(t - nu_e) / p_e pulled in by c_e (kappa <= c_e
@@ -139,10 +139,10 @@ class PlanarStarCover:
         corner over [delta_e - R_e, delta_e] of edge e and [0, L_f] of the next
         edge f: one transition per corner, initially half of each edge (the
         whole edge at an open end), narrowed until
-        :func:`~gerbs_core._envelope_build.blend_check` certifies
+        :func:`~gerbs_core.gauge._envelope_build.blend_check` certifies
         kappa rho <= rho~/shrink <= rho on it (rigorous bound, not sampling).
         """
-        from ._envelope_build import (ADAPTIVE_SCALES, adaptive_scales, blend_scales,
+        from ..gauge._envelope_build import (ADAPTIVE_SCALES, adaptive_scales, blend_scales,
                                       fit_blend_widths)
         E = len(self.delta)
         e = np.flatnonzero(self.next_edge >= 0)

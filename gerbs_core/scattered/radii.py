@@ -27,7 +27,7 @@ import numpy as np
 from scipy.spatial import cKDTree, Delaunay
 from scipy.spatial import QhullError
 
-from .errors import InvalidParameterError, InvalidPointSetError
+from ..errors import InvalidParameterError, InvalidPointSetError
 from .metrics import Bounded, QuasiNorm
 
 __all__ = ["check_points", "nearest_distances", "auto_rho", "auto_R", "validate_radii"]

@@ -29,7 +29,7 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import InvalidParameterError, InvalidPointSetError
+from ..errors import InvalidParameterError, InvalidPointSetError
 
 __all__ = ["multi_indices", "taylor_jet", "estimate_derivatives", "averaged_taylor", "tensors_from_coeffs"]
 
