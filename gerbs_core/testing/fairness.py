@@ -37,6 +37,14 @@ def _unit(v):
     return np.divide(v, n, out=np.zeros_like(v), where=n > 0)
 
 
+def _scatter(index, values, n):
+    """sum of values (N,) or (N, k) per index (N,) into n slots (np.add.at, faster)."""
+    if values.ndim == 1:
+        return np.bincount(index, weights=values, minlength=n)
+    return np.stack([np.bincount(index, weights=values[:, k], minlength=n)
+                     for k in range(values.shape[1])], axis=1)
+
+
 def triangle_normals(points, triangles):
     """(unit normals (T, 3), areas (T,)) of the triangles; a zero-area triangle
     gets the normal 0 (it is left out of every angle below)."""
@@ -60,11 +68,12 @@ def edge_adjacency(triangles):
     T = np.asarray(triangles, dtype=np.int64)
     d = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])  # directed half-edges
     tri = np.tile(np.arange(len(T)), 3)
-    key = np.sort(d, axis=1)
-    order = np.lexsort((key[:, 1], key[:, 0]))
+    n = int(T.max()) + 1 if len(T) else 0
+    key = np.minimum(d[:, 0], d[:, 1]) * n + np.maximum(d[:, 0], d[:, 1])  # undirected edge
+    order = np.argsort(key, kind="stable")
     key, d, tri = key[order], d[order], tri[order]
     new = np.ones(len(key), dtype=bool)
-    new[1:] = np.any(key[1:] != key[:-1], axis=1)
+    new[1:] = key[1:] != key[:-1]
     start = np.flatnonzero(new)
     count = np.diff(np.append(start, len(key)))
     two = start[count == 2]
@@ -137,16 +146,15 @@ def vertex_normals(points, triangles):
     n, _ = triangle_normals(P, T)
     cot, _, _ = _corner_geometry(P, T)
     ang = np.arctan2(1.0, cot)  # angle in (0, pi) from its cotangent
-    acc = np.zeros_like(P)
-    for k in range(3):
-        np.add.at(acc, T[:, k], ang[:, k, None] * n)
+    acc = sum(_scatter(T[:, k], ang[:, k, None] * n, len(P)) for k in range(3))
     return _unit(acc)
 
 
-def boundary_points(triangles, n_points: int):
+def boundary_points(triangles, n_points: int, adjacency=None):
     """(n_points,) bool: points on an edge that has one triangle."""
+    adj = edge_adjacency(triangles) if adjacency is None else adjacency
     mask = np.zeros(n_points, dtype=bool)
-    mask[edge_adjacency(triangles)["boundary_edges"].ravel()] = True
+    mask[adj["boundary_edges"].ravel()] = True
     return mask
 
 
@@ -159,7 +167,7 @@ def _mixed_areas(P, T, cot, dbl, sq):
         k1, k2 = (k + 1) % 3, (k + 2) % 3
         vor = (sq[:, k2] * cot[:, k2] + sq[:, k1] * cot[:, k1]) / 8.0  # edges at corner k
         part = np.where(any_obt, np.where(obtuse[:, k], area / 2.0, area / 4.0), vor)
-        np.add.at(A, T[:, k], part)
+        A += _scatter(T[:, k], part, len(P))
     return A
 
 
@@ -172,7 +180,7 @@ def mixed_areas(points, triangles):
     return _mixed_areas(P, T, *_corner_geometry(P, T))
 
 
-def cotangent_mean_curvature(points, triangles, normals=None):
+def cotangent_mean_curvature(points, triangles, normals=None, adjacency=None):
     """Estimate of the signed mean curvature at the interior points (Meyer, Desbrun,
     Schroeder and Barr 2003, "Discrete differential-geometry operators").
 
@@ -181,7 +189,8 @@ def cotangent_mean_curvature(points, triangles, normals=None):
     ``(H (P,), interior (P,) bool)`` with H_i = |K_i| / 2 signed by K_i . n_i,
     n_i the angle-weighted vertex normal (or the given ``normals`` (P, 3)). NaN
     where it is undefined: boundary points, unreferenced points, zero area.
-    Zero-area triangles contribute nothing.
+    Zero-area triangles contribute nothing. ``adjacency``: :func:`edge_adjacency`
+    of the triangles, if at hand.
     """
     P, T = _mesh(points, triangles)
     cot, dbl, sq = _corner_geometry(P, T)
@@ -189,12 +198,11 @@ def cotangent_mean_curvature(points, triangles, normals=None):
     for k in range(3):
         a, b = T[:, (k + 1) % 3], T[:, (k + 2) % 3]  # the edge opposite corner k
         w = cot[:, k, None] * (P[a] - P[b])
-        np.add.at(K, a, w)
-        np.add.at(K, b, -w)
+        K += _scatter(np.concatenate([a, b]), np.concatenate([w, -w]), len(P))
     A = _mixed_areas(P, T, cot, dbl, sq)
     interior = np.zeros(len(P), dtype=bool)
     interior[np.unique(T)] = True
-    interior &= ~boundary_points(T, len(P))
+    interior &= ~boundary_points(T, len(P), adjacency)
     n = vertex_normals(P, T) if normals is None else np.asarray(normals, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):
         K = K / (2.0 * A[:, None])
