@@ -89,6 +89,9 @@ def measure(case, out) -> dict:
 
 def orders(cases, rows):
     """Observed order of every figure of ORDER_KEYS over the refinement ``cases``
-    (against their mean cage edge length) from ``rows`` [figures of each case]."""
+    (against their mean cage edge length) from ``rows`` [figures of each case]:
+    the least-squares slope over all, and as ``<key>@last`` over the last two."""
     h = [c.h for c in cases]
-    return {k: observed_order(h, [r[k] for r in rows]) for k in ORDER_KEYS}
+    out = {k: observed_order(h, [r[k] for r in rows]) for k in ORDER_KEYS}
+    out.update({f"{k}@last": observed_order(h[-2:], [r[k] for r in rows[-2:]]) for k in ORDER_KEYS})
+    return out

@@ -88,9 +88,10 @@ class Verdicts:
                  f"(exact-derivative H rms {f(Hx)})")
         o = self.O["ico L2-4"][g]["Hrms"]
         dec = all(a > b for a, b in zip(H[1:], H[2:]))
+        og = self.O["ico L2-4"][g]
         self.add(dec and o >= 1.5, f"sphere H rms decreasing L2-4 with order >= 1.5: "
-                 f"{'decreasing' if dec else 'not decreasing'}, order {num(o)} "
-                 f"(exact-derivative {num(self.O['ico L2-4'][g]['Hxrms'])})")
+                 f"{'decreasing' if dec else 'not decreasing'}, order {num(o)} (L3-4 alone "
+                 f"{num(og['Hrms@last'])}; exact-derivative {num(og['Hxrms'])})")
         mn = [self.get(n, g, "Hmin") for n in lv]
         mx = [self.get(n, g, "Hxmin") for n in lv]
         both = [np.nanmin([a, b]) for a, b in zip(mn, mx)]
@@ -110,11 +111,12 @@ class Verdicts:
         f = lambda xs: " / ".join(num(x) for x in xs)  # noqa: E731
         H = [self.get(n, g, "Hrms") for n in ts]
         B = [self.get(n, "butterfly", "Hrms") for n in ts]
-        o = self.O["torus 12-48"][g]["Hrms"]
+        og = self.O["torus 12-48"][g]
+        o = og["Hrms"]
         self.add(all(a <= b for a, b in zip(H, B)) and o >= 1.5,
                  f"torus H rms (cotangent) <= Butterfly's at every size, order >= 1.5: {f(H)} vs "
-                 f"{f(B)}, order {num(o)} (exact-derivative {f([self.get(n, g, 'Hxrms') for n in ts])}"
-                 f", order {num(self.O['torus 12-48'][g]['Hxrms'])})")
+                 f"{f(B)}, order {num(o)} (24-48 alone {num(og['Hrms@last'])}; exact-derivative "
+                 f"{f([self.get(n, g, 'Hxrms') for n in ts])}, order {num(og['Hxrms'])})")
         d = [self.get(n, g, "dmax") for n in ts]
         db = [self.get(n, "butterfly", "dmax") for n in ts]
         self.add(all(a <= b for a, b in zip(d, db)),
