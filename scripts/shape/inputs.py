@@ -103,13 +103,19 @@ def height_field_mesh(kind: str, n: int = 12, seed: int = 7):
 
 
 def blender_primitive(bpy, op: str):
-    """(V, faces) of a Blender primitive added with default parameters."""
+    """(V, faces) of a Blender primitive added with default parameters, the faces in
+    Blender's order -- except the UV sphere's, which Blender emits in a different
+    order at every call (bpy 5.0.1): those are sorted by their vertex sets (corner
+    order kept), since the GERBS surface depends on the face order."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     getattr(bpy.ops.mesh, op)()
     me = bpy.context.active_object.data
     V = np.empty(3 * len(me.vertices))
     me.vertices.foreach_get("co", V)
-    return V.reshape(-1, 3), [tuple(p.vertices) for p in me.polygons]
+    faces = [tuple(p.vertices) for p in me.polygons]
+    if op == "primitive_uv_sphere_add":
+        faces.sort(key=sorted)
+    return V.reshape(-1, 3), faces
 
 
 def sample_path(name: str) -> Path:
