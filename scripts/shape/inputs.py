@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from gerbs_core import primitives
+from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError
 from gerbs_core.mesh_topology import MeshTopology, validate_geometry
-from gerbs_core.obj_io import read_obj
+from gerbs_core.datasets.obj import read_obj
 from gerbs_core.testing import HeightField, Torus, UnitSphere
 
 ROOT = Path(__file__).resolve().parents[2]

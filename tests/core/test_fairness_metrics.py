@@ -4,7 +4,7 @@ a flipped triangle, a perturbed second derivative) that each metric must catch."
 import numpy as np
 import pytest
 
-from gerbs_core.primitives import grid, icosphere
+from gerbs_core.datasets.primitives import grid, icosphere
 from gerbs_core.testing import (
     HeightField,
     Torus,
