@@ -76,7 +76,7 @@ stats: Counter = Counter()  # how often each SyncResult status occurred (tests, 
 
 
 def state_key(obj, mod) -> tuple:
-    return (obj.session_uid, mod.persistent_uid)
+    return (obj.session_uid, getattr(mod, "persistent_uid", mod.name))  # (name before 4.2)
 
 
 def get_state(obj, mod) -> SurfaceState | None:
@@ -291,7 +291,8 @@ def _rebuild(obj, mod, res, settings, skey, inp, progress, t0):
 
 def _write_result(mesh, st, prev, lattice, surface, settings, inp) -> None:
     if (prev is not None and prev.triangles is not None and prev.result_uid == st.result_uid
-            and len(mesh.vertices) == len(st.points) and np.array_equal(prev.triangles, st.triangles)):
+            and len(mesh.vertices) == len(st.points)
+            and np.array_equal(prev.triangles, st.triangles)):
         mesh_io.write_positions(mesh, st.points)  # e.g. a new kernel: same output topology
     else:  # edges from the lattice structure where it has them (no hashing in Blender)
         mesh_io.write_surface(mesh, st.points, st.triangles,

@@ -124,7 +124,8 @@ def write_built(mod, settings: dict) -> None:
         value = settings[spec.key]
         if spec.items:
             value = list(spec.items).index(value)  # the Menu Switch output: item position
-        mod[keys[built.name]] = float(value) if built.socket_type == "NodeSocketFloat" else int(value)
+        as_float = built.socket_type == "NodeSocketFloat"
+        mod[keys[built.name]] = float(value) if as_float else int(value)
 
 
 def get_result(mod):

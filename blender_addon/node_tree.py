@@ -235,4 +235,5 @@ def build(group) -> None:
     t.link(base, switch.inputs["False"])
     t.link(_strip_snapshot(t, result), switch.inputs["True"])
     t.link(switch.outputs[0], gout.inputs[0])
-    gin.location, info.location, switch.location, gout.location = (-900, 0), (-600, 300), (600, 0), (1400, 0)
+    for node, xy in ((gin, (-900, 0)), (info, (-600, 300)), (switch, (600, 0)), (gout, (1400, 0))):
+        node.location = xy

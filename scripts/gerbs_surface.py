@@ -52,8 +52,10 @@ def parse_args(argv):
     p.add_argument("input", nargs="?", type=Path, default=SAMPLE,
                    help=f"mesh file {INPUTS} (default: the bundled {SAMPLE.relative_to(ROOT)})")
     p.add_argument("-o", "--output", type=Path, default=None,
-                   help=f"output {OUTPUTS} (default: out/<input name>_gerbs.glb under the current directory)")
-    p.add_argument("--resolution", type=int, default=4, help="segments per mesh edge, 1..64 (default 4)")
+                   help=f"output {OUTPUTS} (default: out/<input name>_gerbs.glb under the "
+                        "current directory)")
+    p.add_argument("--resolution", type=int, default=4,
+                   help="segments per mesh edge, 1..64 (default 4)")
     p.add_argument("--degree", type=int, default=2, help="local polynomial degree 0..3 (default 2)")
     p.add_argument("--kernel", default="erbs", choices=["erbs", "bfbs", "logistic", "affine"])
     p.add_argument("--mode", default="regular", choices=["regular", "metric"])
@@ -361,7 +363,8 @@ def main(argv=None) -> int:
     try:
         args = parse_args(sys.argv[1:] if argv is None else argv)
         src, out = check_paths(args)
-        protected = [src] + (gltf_references(src) if src.suffix.lower() in (".gltf", ".glb") else [])
+        gltf = src.suffix.lower() in (".gltf", ".glb")
+        protected = [src] + (gltf_references(src) if gltf else [])
         if any(_same_file(out, p) for p in protected if p.exists()):
             raise UserError(f"output {args.output} is a file the input uses; choose another name")
         run(args, src, out, protected)

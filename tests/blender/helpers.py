@@ -122,3 +122,25 @@ def face_rings(offsets, corners, n_vertices, w, kmax=6) -> np.ndarray:
         ring[touched & (ring > k)] = k
         verts[corners[touched[face_of_corner]]] = True
     return ring
+
+
+def export_and_reimport(obj, path: Path):
+    """Export `obj` with its modifiers applied (glTF binary or OBJ by `path`'s suffix,
+    at the current frame) into an empty scene, re-import it; return the new object."""
+    bpy.ops.object.select_all(action="DESELECT")
+    obj.select_set(True)
+    if path.suffix == ".glb":
+        # (without export_current_frame the glTF exporter evaluates frame 0)
+        bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", use_selection=True,
+                                  export_apply=True, export_animations=False,
+                                  export_current_frame=True)
+    else:
+        bpy.ops.wm.obj_export(filepath=str(path), export_selected_objects=True,
+                              apply_modifiers=True, export_materials=False)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    if path.suffix == ".glb":
+        bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=True)
+    else:
+        bpy.ops.wm.obj_import(filepath=str(path))
+    (imported,) = [o for o in bpy.data.objects if o.type == "MESH"]
+    return imported

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from .helpers import (evaluated, fresh_surface, make_object, modifier_input, topology,
-                      warnings)
+from .helpers import (evaluated, export_and_reimport, fresh_surface, make_object,
+                      modifier_input, topology, warnings)
 
 pytestmark = pytest.mark.blender
 
@@ -154,23 +154,6 @@ def test_export_after_a_frame_change_writes_the_current_surface(blender, tmp_pat
     P1 = evaluated(obj)
     bpy.context.scene.frame_set(10)
     P10 = _assert_current(obj, resolution=2)
-    path = tmp_path / f"frame10{ext}"
-    bpy.ops.object.select_all(action="DESELECT")
-    obj.select_set(True)
-    if ext == ".glb":
-        # (without export_current_frame the glTF exporter evaluates frame 0: the
-        # handler follows that frame too, and frame 0 is what it writes)
-        bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", use_selection=True,
-                                  export_apply=True, export_animations=False,
-                                  export_current_frame=True)
-    else:
-        bpy.ops.wm.obj_export(filepath=str(path), export_selected_objects=True,
-                              apply_modifiers=True, export_materials=False)
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    if ext == ".glb":
-        bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=True)
-    else:
-        bpy.ops.wm.obj_import(filepath=str(path))
-    (imported,) = [o for o in bpy.data.objects if o.type == "MESH"]
+    imported = export_and_reimport(obj, tmp_path / f"frame10{ext}")
     _point_sets_equal(P10, positions(imported.data))
     assert np.abs(P10 - P1).max() > 0.5

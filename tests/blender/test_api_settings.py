@@ -63,7 +63,8 @@ BAD_SETTINGS = [
 
 
 @pytest.mark.parametrize("key,value,match", BAD_SETTINGS)
-def test_set_settings_refuses_bad_values_at_set_time_and_changes_nothing(blender, key, value, match):
+def test_set_settings_refuses_bad_values_at_set_time_and_changes_nothing(blender, key, value,
+                                                                        match):
     from blender_addon import api
     from gerbs_core.errors import InvalidParameterError
 

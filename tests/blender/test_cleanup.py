@@ -33,7 +33,8 @@ def test_deleting_the_hidden_result_by_hand_leaves_no_orphans(blender):
     assert not [m for m in bpy.data.meshes if m.users == 0]
 
 
-@pytest.mark.parametrize("how", ["api", "operator", "native remove", "native apply", "delete object"])
+@pytest.mark.parametrize("how", ["api", "operator", "native remove", "native apply",
+                                 "delete object"])
 def test_the_last_modifier_gone_takes_results_meshes_and_group_with_it(blender, how):
     from blender_addon import api
 

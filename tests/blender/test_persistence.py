@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from .helpers import evaluated, evaluated_triangles, make_object, positions, topology
+from .helpers import (evaluated, evaluated_triangles, export_and_reimport, make_object,
+                      positions, topology)
 
 pytestmark = pytest.mark.blender
 
@@ -83,21 +84,7 @@ def test_export_writes_surface_and_reimports_identically(blender, tmp_path, ext)
     obj = make_object("suzanne")
     api.add_surface(obj, resolution=2)
     P, T = evaluated(obj), evaluated_triangles(obj)
-    path = tmp_path / f"surface{ext}"
-    bpy.ops.object.select_all(action="DESELECT")
-    obj.select_set(True)
-    if ext == ".glb":
-        bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", use_selection=True,
-                                  export_apply=True)
-    else:
-        bpy.ops.wm.obj_export(filepath=str(path), export_selected_objects=True,
-                              apply_modifiers=True, export_materials=False)
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    if ext == ".glb":
-        bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=True)
-    else:
-        bpy.ops.wm.obj_import(filepath=str(path))
-    (imported,) = [o for o in bpy.data.objects if o.type == "MESH"]
+    imported = export_and_reimport(obj, tmp_path / f"surface{ext}")
     Q = positions(imported.data)
     loops = np.empty(len(imported.data.loops), dtype=np.int32)
     imported.data.loops.foreach_get("vertex_index", loops)
