@@ -10,9 +10,9 @@ arguments (kernel object, ``BlendingSurface`` keywords, resolution): a change
 of the core's options is a change here.
 
 Values, as in ``api.add_surface(**settings)``: menus as lower-case keys (either
-case accepted), ints as ``int`` (not bool, not float), floats as finite reals,
-``use_normals`` as bool, ``memory_budget`` in bytes. Ranges are the sockets'
-(``ids.SETTINGS``).
+case accepted), ints as ``int`` (not bool, not float), floats as finite reals
+(returned rounded to float32, as the modifier stores them), ``use_normals`` as
+bool, ``memory_budget`` in bytes. Ranges are the sockets' (``ids.SETTINGS``).
 """
 from __future__ import annotations
 
@@ -53,13 +53,18 @@ def _integer(spec, value):
 
 
 def _real(spec, value):
+    """The value as the float socket stores it (float32, in socket units), checked
+    against the socket's float32 range: what is validated is what is read back."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise _error(spec.key, f"must be a real number, got {value!r}")
     value = float(value)
     lo, hi = _range(spec)
-    if not (math.isfinite(value) and lo <= value <= hi):
+    with np.errstate(over="ignore"):
+        stored = np.float32(value / spec.scale)
+    if not (math.isfinite(value) and np.isfinite(stored)
+            and np.float32(spec.min) <= stored <= np.float32(spec.max)):
         raise _error(spec.key, f"must be finite and in [{lo:g}, {hi:g}], got {value}")
-    return value
+    return float(stored) * spec.scale
 
 
 def _boolean(spec, value):

@@ -93,10 +93,16 @@ def test_operator_refuses_bad_values_with_one_message(blender, key, value, match
 
 
 def test_settings_read_back_as_set(blender):
+    """Float sockets store float32: the validator checks (and returns) the stored value,
+    so the smallest allowed alpha (0.01, not a float32) is accepted and reads back."""
     from blender_addon import api
 
     obj = make_object("icosphere")
-    api.add_surface(obj, resolution=2)
+    api.add_surface(obj, resolution=2, alpha=0.01, gamma=100.0)
+    got = api.get_settings(obj)
+    assert got["alpha"] == float(np.float32(0.01)) and got["gamma"] == 100.0
+    api.set_settings(obj, alpha=1.1)
+    assert api.get_settings(obj)["alpha"] == float(np.float32(1.1))
     api.set_settings(obj, kernel="BFBS", bfbs_left=3, degree=1, lam=0.25, memory_budget=5e8,
                      use_normals=True, mode="metric")
     got = api.get_settings(obj)
