@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """What the add-on's handlers cost for updates that do not touch a GERBS object.
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/bench_handlers.py [--objects 2000] [--rounds 7]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/bench_handlers.py [--objects 2000] [--rounds 150]
 
 A scene of N unrelated mesh objects (cubes, each with its own mesh) and one
 Suzanne with a GERBS modifier (resolution 8). Timed, each a median over
@@ -11,12 +11,15 @@ Suzanne with a GERBS modifier (resolution 8). Timed, each a median over
   edit    write a cube's vertex positions, ``mesh.update(); view_layer.update()``
           (a geometry update of an unrelated mesh)
 
-Rounds alternate three set-ups so all see the same machine load: the add-on
-registered; unregistered (its handlers gone, the modifier and its result still
-in the scene); unregistered plus a do-nothing Python ``depsgraph_update_post``
-handler (the floor any Python handler costs: Blender calls into Python for
-every update). Reported: the median over rounds of each, and "pair", the median
-over rounds of (with / without) within a round. Target (issue 16): pair <= 1.10.
+Set-ups, alternated every ``--batch`` updates so that all see the same machine
+load (on a shared machine the load drifts by more than the effect): the add-on
+registered; its handlers removed (what it costs per update is its handlers:
+the modifier and its result stay in the scene either way, as after
+``unregister``); a do-nothing Python ``depsgraph_update_post`` handler instead
+(the floor any Python handler costs: Blender calls into Python for every
+update). Reported: the median over batches of each, and "pair", the median
+over rounds of (set-up / no handlers) within a round. Target (issue 16): the
+add-on's pair <= 1.10.
 """
 from __future__ import annotations
 
@@ -63,8 +66,8 @@ def timed_updates(bpy, fn, n: int) -> float:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--objects", type=int, default=2000)
-    ap.add_argument("--rounds", type=int, default=7)
-    ap.add_argument("--updates", type=int, default=40)
+    ap.add_argument("--rounds", type=int, default=150)
+    ap.add_argument("--batch", type=int, default=5, help="updates per set-up and round")
     args = ap.parse_args(argv)
     import bpy
 
@@ -88,21 +91,26 @@ def main(argv=None) -> int:
     def noop(scene, depsgraph):
         pass
 
-    setups = ("add-on", "without", "noop")
+    from blender_addon import handlers
+
+    ours = [(name, func) for name, func in handlers._HANDLERS
+            if name in ("depsgraph_update_post", "frame_change_post")]
+    setups = {"add-on": ours, "without": [], "noop": [("depsgraph_update_post", noop)]}
     rows = {(name, setup): [] for name in ("move", "edit") for setup in setups}
     for _ in range(args.rounds):
-        for setup in setups:
-            (blender_addon.register if setup == "add-on" else blender_addon.unregister)()
-            if setup == "noop":
-                bpy.app.handlers.depsgraph_update_post.append(noop)
-            bpy.context.view_layer.update()
+        for setup, funcs in setups.items():
+            for name, func in ours:
+                handlers._remove(name, func)
+            for name, func in funcs:
+                getattr(bpy.app.handlers, name).append(func)
             for name, fn in (("move", move), ("edit", edit)):
-                timed_updates(bpy, fn, 3)  # warm
-                rows[name, setup].append(timed_updates(bpy, fn, args.updates))
-            if setup == "noop":
-                bpy.app.handlers.depsgraph_update_post.remove(noop)
-    print(f"{args.objects} unrelated objects + 1 GERBS object; medians of {args.updates} "
-          f"updates per round, {args.rounds} rounds")
+                timed_updates(bpy, fn, 1)  # the first update after a switch: not timed
+                rows[name, setup].append(timed_updates(bpy, fn, args.batch))
+            for name, func in funcs:
+                getattr(bpy.app.handlers, name).remove(func)
+    blender_addon.register()
+    print(f"{args.objects} unrelated objects + 1 GERBS object; {args.rounds} rounds of "
+          f"{args.batch} updates per set-up")
     print(f"{'update':<6} {'add-on ms':>10} {'without ms':>11} {'no-op ms':>9} "
           f"{'pair add-on':>12} {'pair no-op':>11}")
     for name in ("move", "edit"):
