@@ -8,35 +8,52 @@
     api.apply(obj)             # bake into obj.data
     api.remove(obj)            # or drop the modifier and its hidden result
 
-Settings (keywords, see ``ids.SETTINGS``): kernel ("erbs", "bfbs", "logistic",
-"affine"), alpha, beta, gamma, lam, sigma (ERBS), bfbs_left, bfbs_right,
-degree (0..3), resolution (segments per edge), mode ("regular", "metric"),
-boundary ("keep", "straighten"), use_normals.
+Settings (keywords, see ``ids.SETTINGS`` and ``settings.validate``): kernel
+("erbs", "bfbs", "logistic", "affine"), alpha, beta, gamma, lam, sigma (ERBS),
+bfbs_left, bfbs_right, degree (0..3), resolution (segments per edge, 1..64),
+mode ("regular", "metric"), boundary ("keep", "straighten"), use_normals,
+memory_budget (bytes).
 
-Errors: bad settings raise ``ValueError``; an invalid mesh raises
-``gerbs_core.errors.InvalidMeshError`` from :func:`add_surface` and
-:func:`update` when ``raise_errors=True`` (the default) — the modifier is kept
-and shows the message, the base mesh is untouched.
+Errors (all ``gerbs_core.errors.GERBSError``):
+
+* a bad setting: ``InvalidParameterError`` (a ValueError) naming it, raised
+  when it is set; nothing is changed;
+* an invalid mesh: :class:`GERBSSyncError` (a ValueError) from
+  :func:`add_surface`, :func:`update` and :func:`apply` when ``raise_errors``
+  -- the modifier is kept and shows the message, the base mesh is untouched;
+* an object without the modifier (or not a mesh): :class:`NoModifierError`;
+* Apply refused by Blender (Edit Mode, a mesh used by several objects):
+  :class:`OperationError` (a RuntimeError).
 """
 from __future__ import annotations
 
 import bpy
 
-from . import engine, ids
+from . import engine, handlers, ids
 from . import geometry_nodes as gn
+from . import settings as settings_mod
+from .errors import GERBSSyncError, NoModifierError, OperationError, operator_message
+
+__all__ = ["add_surface", "apply", "get_modifier", "get_settings", "remove", "set_settings",
+           "status", "update", "GERBSSyncError", "NoModifierError", "OperationError"]
 
 
-class GERBSSyncError(ValueError):
-    """The surface could not be built; the message names the problem and indices."""
+def _mesh_object(obj):
+    if not isinstance(obj, bpy.types.Object) or obj.type != "MESH":
+        raise NoModifierError(f"expected a mesh object, got {obj!r}")
+    return obj
 
 
-def _check_mesh_object(obj) -> None:
-    if obj is None or obj.type != "MESH":
-        raise ValueError(f"expected a mesh object, got {obj!r}")
+def _modifier(obj, mod=None):
+    _mesh_object(obj)
+    mod = mod or get_modifier(obj)
+    if mod is None:
+        raise NoModifierError(f"{obj.name!r} has no {ids.MODIFIER_NAME} modifier")
+    return mod
 
 
-def _raise_if_error(results, raise_errors: bool) -> None:
-    errors = [r.message for r in results if r.status == "error"]
+def _raise_if_error(outcome, raise_errors: bool) -> None:
+    errors = [r.message for r in outcome if r.status == "error"]
     if errors and raise_errors:
         raise GERBSSyncError("; ".join(errors))
 
@@ -50,81 +67,78 @@ def get_modifier(obj):
 def add_surface(obj, *, progress=None, raise_errors: bool = True, **settings):
     """Add a GERBS Blending Surface modifier to `obj` (a mesh object) and build it.
 
-    Returns the modifier. Raises ``GERBSSyncError`` (a ValueError) naming the
-    problem if the mesh is invalid (the modifier stays, showing the error).
+    Returns the modifier. Raises InvalidParameterError (nothing added) for a bad
+    setting, ``GERBSSyncError`` naming the problem if the mesh is invalid (the
+    modifier stays, showing the error).
     """
-    _check_mesh_object(obj)
-    unknown = set(settings) - set(ids.SETTING_KEYS)
-    if unknown:
-        raise ValueError(f"unknown GERBS settings {sorted(unknown)}; expected {list(ids.SETTING_KEYS)}")
-    group = gn.ensure_group()
+    _mesh_object(obj)
+    values = settings_mod.validate({**ids.DEFAULTS, **settings})
     mod = obj.modifiers.new(ids.MODIFIER_NAME, "NODES")
-    mod.node_group = group
-    try:
-        gn.write_settings(mod, **{**ids.DEFAULTS, **settings})
-    except ValueError:
-        obj.modifiers.remove(mod)
-        raise
+    mod.node_group = gn.ensure_group()
+    gn.write_settings(mod, **values)
     gn.set_error(mod, "")
-    result = engine.sync(obj, mod, force=True, progress=progress)
     obj.update_tag()
-    _raise_if_error([result], raise_errors)
+    _raise_if_error(handlers.sync_now(obj, progress=progress), raise_errors)
     return mod
 
 
 def set_settings(obj, mod=None, **settings) -> None:
-    """Change settings of `obj`'s GERBS modifier; the surface updates on the next sync."""
-    mod = mod or get_modifier(obj)
-    gn.write_settings(mod, **settings)
+    """Change settings of `obj`'s GERBS modifier (validated first: a bad value
+    raises InvalidParameterError and changes nothing); the surface follows on
+    the next depsgraph update."""
+    gn.write_settings(_modifier(obj, mod), **settings)
     obj.update_tag()
 
 
 def get_settings(obj, mod=None) -> dict:
-    return gn.read_settings(mod or get_modifier(obj))
+    return gn.read_settings(_modifier(obj, mod))
 
 
 def update(obj, *, force: bool = False, progress=None, raise_errors: bool = True):
-    """Sync every GERBS modifier of `obj` now (force: rebuild and rebind rest lengths)."""
-    _check_mesh_object(obj)
-    results = engine.sync_object(obj, force=force, progress=progress)
+    """Sync `obj`'s GERBS modifier now (force: rebuild and rebind rest lengths)."""
+    _modifier(obj)
+    outcome = handlers.sync_now(obj, force=force, progress=progress)
     obj.update_tag()
-    _raise_if_error(results, raise_errors)
-    return results
+    _raise_if_error(outcome, raise_errors)
+    return outcome
 
 
 def apply(obj, mod=None) -> None:
-    """Bake the surface into ``obj.data`` (like Apply in the modifier panel)."""
-    _check_mesh_object(obj)
-    mod = mod or get_modifier(obj)
-    if mod is None:
-        raise ValueError(f"{obj.name!r} has no GERBS modifier")
-    results = [engine.sync(obj, mod)]
-    _raise_if_error(results, True)
+    """Bake the current surface into ``obj.data`` (like Apply in the modifier panel)."""
+    mod = _modifier(obj, mod)
     if obj.mode != "OBJECT":
-        raise RuntimeError("apply needs Object Mode")
-    bpy.context.view_layer.update()
-    with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj]):
-        bpy.ops.object.modifier_apply(modifier=mod.name)
-    engine.collect_garbage()
+        raise OperationError(f"{obj.name!r}: apply needs Object Mode")
+    if obj.data.users > 1:
+        raise OperationError(f"{obj.name!r}: its mesh {obj.data.name!r} is used by "
+                             f"{obj.data.users} objects; make it single-user first")
+    _raise_if_error(handlers.sync_now(obj), True)
+    bpy.context.view_layer.update()  # the result written by the sync is what gets applied
+    try:
+        with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj]):
+            bpy.ops.object.modifier_apply(modifier=mod.name)
+    except RuntimeError as exc:
+        raise OperationError(f"{obj.name!r}: {operator_message(exc)}") from None
+    handlers.collect_now()
 
 
 def remove(obj, mod=None) -> None:
-    """Remove the GERBS modifier and its hidden result object; the base mesh is as before."""
-    _check_mesh_object(obj)
+    """Remove the GERBS modifier and its hidden result object; the base mesh is as
+    before. A no-op if there is none."""
+    _mesh_object(obj)
     mod = mod or get_modifier(obj)
     if mod is None:
         return
     obj.modifiers.remove(mod)
     obj.update_tag()
-    engine.collect_garbage()
+    handlers.collect_now()
 
 
 def status(obj, mod=None) -> dict:
     """Counts, timings and the last error of a modifier (for panels and scripts)."""
-    mod = mod or get_modifier(obj)
+    mod = _modifier(obj, mod)
     st = engine.get_state(obj, mod)
     out = {"error": gn.get_error(mod)}
-    if st is not None:
+    if st is not None and not st.error:
         out.update(points=st.n_points, triangles=st.n_triangles,
                    build_seconds=st.build_seconds, update_seconds=st.update_seconds)
     return out

@@ -1,27 +1,25 @@
 """The Geometry Nodes group behind the modifier, and reading/writing its inputs.
 
 Why this route (DESIGN section 7). Blender has no Python API for new modifier
-types; a Geometry Nodes modifier is the one modifier Python can define. Our
-group is::
-
-    Group Input.Result --> Object Info (Original space) --.
-                                                          |-- Switch --> Group Output
-    Group Input.Geometry ---------------------------------'     ^
-    Group Input.Error --> Compare(!= "") --> Warning(Error) ----'
+types; a Geometry Nodes modifier is the one modifier Python can define. One
+group (built by :mod:`node_tree`) serves every object:
 
 * the settings (kernel, kernel parameters, degree, resolution, face shape,
-  boundary rule, normals) are extra group inputs, so they live on the modifier
-  (``mod["Socket_N"]``), show in its panel, are animatable and saved in the
-  .blend, and one group serves every object;
+  boundary rule, normals, memory budget) are group inputs, so they live on the
+  modifier (``mod["Socket_N"]``), show in its panel, are animatable and saved
+  in the .blend;
 * the surface itself is computed by ``gerbs_core`` and written by the add-on
   into a hidden result object (not linked to any scene; its only user is the
-  modifier's "Result" input, so it is saved with the file and the surface still
-  shows when the add-on is missing). Writing new data there re-evaluates the
-  modifier; the stack, visibility toggles, Apply, and the glTF/OBJ exporters
-  with "apply modifiers" all see an ordinary modifier result;
+  modifier's hidden "Result" input, so it is saved with the file). The result
+  mesh also stores the input it was built from, and hidden "Built ..." inputs
+  the settings; the group shows the result only while both equal what the
+  modifier receives now, else the base mesh and a warning (node_tree.py), so a
+  stale surface is never shown, applied or exported -- with or without the
+  add-on. The stack, visibility toggles, Apply and the glTF/OBJ exporters see an
+  ordinary modifier result;
 * on an invalid mesh the add-on writes the message into the hidden "Error"
-  input: the Warning node shows it in the modifier panel and the Switch passes
-  the base mesh through unchanged.
+  input: a Warning node shows it in the modifier panel and the base mesh passes
+  through unchanged.
 
 Alternatives rejected: a Python-only "fake modifier" (an operator rewriting
 ``obj.data``) destroys the base mesh and breaks Apply/visibility/undo; a
@@ -32,86 +30,27 @@ from __future__ import annotations
 
 import bpy
 
-from . import ids
-
-_MENU_NODE = "gerbs_menu_"  # name prefix of the Menu Switch nodes defining the menus
-
-
-def _new_socket(itf, spec: ids.SocketSpec):
-    sock = itf.new_socket(spec.name, in_out="INPUT", socket_type=spec.socket_type)
-    sock.description = spec.description
-    if hasattr(sock, "structure_type") and spec.socket_type != "NodeSocketObject":
-        try:
-            sock.structure_type = "SINGLE"  # a setting, not a field: no attribute toggle
-        except (TypeError, AttributeError):
-            pass
-    if spec.min is not None:
-        sock.min_value = spec.min
-    if spec.max is not None:
-        sock.max_value = spec.max
-    if spec.default is not None and spec.socket_type != "NodeSocketMenu":
-        sock.default_value = spec.default
-    sock.hide_in_modifier = spec.hidden
-    return sock
-
-
-def _build(group) -> None:
-    itf = group.interface
-    itf.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
-    itf.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
-    sockets = {spec.key: _new_socket(itf, spec) for spec in ids.INTERNAL + ids.SETTINGS}
-    nodes, links = group.nodes, group.links
-    gin = nodes.new("NodeGroupInput")
-    gout = nodes.new("NodeGroupOutput")
-    info = nodes.new("GeometryNodeObjectInfo")
-    info.transform_space = "ORIGINAL"  # positions are written in the base object's space
-    links.new(gin.outputs["Result"], info.inputs["Object"])
-    # Menus: a Menu Switch linked to a menu input defines that input's items.
-    for k, spec in enumerate(s for s in ids.SETTINGS if s.items):
-        menu = nodes.new("GeometryNodeMenuSwitch")
-        menu.name = _MENU_NODE + spec.key
-        menu.data_type = "INT"
-        menu.enum_items.clear()
-        for value, label in enumerate(spec.items.values()):
-            menu.enum_items.new(label)
-        for value, sock in enumerate(s for s in menu.inputs if s.identifier.startswith("Item_")):
-            sock.default_value = value
-        links.new(gin.outputs[spec.name], menu.inputs["Menu"])
-        menu.location = (0, -200 - 150 * k)
-        # the items exist once linked: now the default can be set
-        sockets[spec.key].default_value = spec.items[spec.default]
-    compare = nodes.new("FunctionNodeCompare")
-    compare.data_type = "STRING"
-    compare.operation = "NOT_EQUAL"
-    a_str = next(s for s in compare.inputs if s.identifier == "A_STR")
-    links.new(gin.outputs["Error"], a_str)
-    warning = nodes.new("GeometryNodeWarning")
-    warning.warning_type = "ERROR"
-    links.new(compare.outputs[0], warning.inputs["Show"])
-    links.new(gin.outputs["Error"], warning.inputs["Message"])
-    switch = nodes.new("GeometryNodeSwitch")
-    switch.input_type = "GEOMETRY"
-    links.new(warning.outputs["Show"], switch.inputs["Switch"])
-    links.new(info.outputs["Geometry"], switch.inputs["False"])
-    links.new(gin.outputs["Geometry"], switch.inputs["True"])
-    links.new(switch.outputs[0], gout.inputs[0])
-    gin.location, info.location, switch.location, gout.location = (-400, 0), (-100, 100), (300, 0), (500, 0)
-    compare.location, warning.location = (-100, -100), (100, -100)
+from . import ids, node_tree
+from . import settings as settings_mod
 
 
 def is_gerbs_group(group) -> bool:
     return group is not None and group.get(ids.GROUP_TAG) is not None
 
 
+def is_current_group(group) -> bool:
+    return is_gerbs_group(group) and group.get(ids.GROUP_TAG) == ids.GROUP_VERSION
+
+
 def ensure_group():
-    """Return the add-on's node group, creating it if the file has none."""
+    """Return the add-on's node group (this version), creating it if the file has none."""
     for group in bpy.data.node_groups:
-        if is_gerbs_group(group) and group.get(ids.GROUP_TAG) == ids.GROUP_VERSION:
+        if is_current_group(group):
             return group
     group = bpy.data.node_groups.new(ids.NODE_GROUP_NAME, "GeometryNodeTree")
     group.is_modifier = True
     group[ids.GROUP_TAG] = ids.GROUP_VERSION
-    _build(group)
+    node_tree.build(group)
     return group
 
 
@@ -120,7 +59,7 @@ def is_gerbs_modifier(mod) -> bool:
 
 
 def gerbs_modifiers(obj):
-    """The object's GERBS modifiers (usually one)."""
+    """The object's GERBS modifiers (one is supported; see engine.sync)."""
     if obj is None or obj.type != "MESH":
         return []
     return [m for m in obj.modifiers if is_gerbs_modifier(m)]
@@ -134,53 +73,59 @@ def _identifiers(group) -> dict:
 
 def _menu_values(group, spec) -> dict:
     """python value -> stored int of the menu item (the Menu Switch item identifier)."""
-    node = group.nodes.get(_MENU_NODE + spec.key)
+    node = group.nodes.get(node_tree.MENU_NODE + spec.key)
     by_label = {s.name: int(s.identifier.split("_")[1])
                 for s in node.inputs if s.identifier.startswith("Item_")}
     return {value: by_label[label] for value, label in spec.items.items()}
 
 
+def _python_value(group, spec, raw):
+    """A stored modifier property as the python value the validator checks."""
+    if spec.items:
+        inverse = {v: k for k, v in _menu_values(group, spec).items()}
+        return inverse.get(int(raw), raw)
+    if spec.socket_type == "NodeSocketFloat":
+        return float(raw) * spec.scale
+    if spec.socket_type == "NodeSocketBool":
+        return bool(raw)
+    return int(raw)
+
+
 def read_settings(mod) -> dict:
-    """The modifier's settings as python values (menus as their lower-case keys)."""
+    """The modifier's settings, validated (``settings.validate``: raises
+    InvalidParameterError naming a bad value, e.g. one a driver produced)."""
     group = mod.node_group
     keys = _identifiers(group)
-    out = {}
-    for spec in ids.SETTINGS:
-        raw = mod.get(keys[spec.name], spec.default)
-        if spec.items:
-            inverse = {v: k for k, v in _menu_values(group, spec).items()}
-            out[spec.key] = inverse.get(int(raw), spec.default)
-        elif spec.socket_type == "NodeSocketFloat":
-            out[spec.key] = float(raw)
-        elif spec.socket_type == "NodeSocketInt":
-            out[spec.key] = int(raw)
-        else:
-            out[spec.key] = bool(raw)
-    return out
+    raw = {s.key: _python_value(group, s, mod.get(keys[s.name], s.default))
+           for s in ids.SETTINGS if s.name in keys}
+    return settings_mod.validate({**ids.DEFAULTS, **raw})
 
 
 def write_settings(mod, **settings) -> None:
-    """Set settings by keyword; unknown keywords and bad menu values raise ValueError."""
+    """Validate `settings` (all of them first: nothing is written if one is bad),
+    then store them on the modifier."""
+    values = settings_mod.validate(settings)
     group = mod.node_group
     keys = _identifiers(group)
     specs = {s.key: s for s in ids.SETTINGS}
-    for key, value in settings.items():
-        spec = specs.get(key)
-        if spec is None:
-            raise ValueError(f"unknown GERBS setting {key!r}; expected one of {sorted(specs)}")
+    for key, value in values.items():
+        spec = specs[key]
         if spec.items:
-            values = _menu_values(group, spec)
-            # the operators' enums spell items in upper case ("LOGISTIC"): accept both
-            value = value.lower() if isinstance(value, str) else value
-            if value not in values:
-                raise ValueError(f"{key}: expected one of {sorted(values)}, got {value!r}")
-            mod[keys[spec.name]] = values[value]
+            value = _menu_values(group, spec)[value]
         elif spec.socket_type == "NodeSocketFloat":
-            mod[keys[spec.name]] = float(value)
-        elif spec.socket_type == "NodeSocketInt":
-            mod[keys[spec.name]] = int(value)
-        else:
-            mod[keys[spec.name]] = bool(value)
+            value = value / spec.scale
+        mod[keys[spec.name]] = value
+
+
+def write_built(mod, settings: dict) -> None:
+    """Record the settings a result was built with (compared by the node group)."""
+    keys = _identifiers(mod.node_group)
+    for spec, built in zip(ids.SHAPE_SETTINGS, ids.BUILT):
+        value = settings[spec.key]
+        if spec.items:
+            value = list(spec.items).index(value)  # the Menu Switch output: item position
+        as_float = built.socket_type == "NodeSocketFloat"
+        mod[keys[built.name]] = float(value) if as_float else int(value)
 
 
 def get_result(mod):
@@ -201,4 +146,25 @@ def set_error(mod, message: str) -> bool:
     if str(mod.get(key, "")) == message:
         return False
     mod[key] = message
+    return True
+
+
+def upgrade(mod) -> bool:
+    """Move a modifier using an older version of the group to the current one,
+    keeping its settings (read by socket name) and result. True if it changed."""
+    old = mod.node_group
+    if not is_gerbs_group(old) or is_current_group(old):
+        return False
+    keys = _identifiers(old)
+    raw = {s.key: _python_value(old, s, mod[keys[s.name]])
+           for s in ids.SETTINGS if s.name in keys and keys[s.name] in mod}
+    result = mod.get(keys.get("Result", ""))
+    mod.node_group = ensure_group()
+    for key, value in raw.items():
+        try:
+            write_settings(mod, **{key: value})
+        except ValueError:  # an out-of-range old value: keep the new group's default
+            pass
+    if result is not None:
+        set_result(mod, result)
     return True

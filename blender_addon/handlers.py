@@ -1,39 +1,53 @@
-"""Application handlers: live update, undo/redo resync, cache rebuild on load.
+"""Application handlers: live update, frame changes, undo/redo, file loads.
 
-``depsgraph_update_post`` collects the GERBS objects whose geometry changed
-(mesh edits in Object or Edit Mode, modifier input changes: both tag the
-object) and syncs them right in the handler: no ``bpy.ops``, a module-level
-guard against re-entrancy, and :func:`engine.sync` writes nothing when nothing
-changed. Blender evaluates the depsgraph a second time, without running the
-callbacks again, when a post-update callback tagged data (our write into the
-result object), so one ``depsgraph.update()`` already shows the new surface.
+``depsgraph_update_post`` and ``frame_change_post`` look at the depsgraph's
+updates only: an update of anything but a mesh object whose geometry (or
+shading) changed costs one type check; a mesh object is synced when it carries a
+GERBS modifier. Frame changes matter because animation, drivers and shape-key
+values change what the modifier receives without any edit. The sync runs right
+in the handler (no ``bpy.ops``, a module-level guard against re-entrancy, and
+:func:`engine.sync` writes nothing when nothing changed): Blender evaluates the
+depsgraph a second time, without running the callbacks again, when a
+post-update callback tagged data (our write into the result object), so one
+``depsgraph.update()`` or ``frame_set`` already shows the new surface.
 Background mode has no timers, which is why the work is not deferred to one.
 
+Garbage (results of removed modifiers, meshes of result objects deleted by
+hand, the unused node group) is collected when a synced object lost its GERBS
+modifier, a result was replaced, or a deletion happened (the update touches the
+scene and the number of objects, meshes or node groups changed).
+
 ``undo_post`` / ``redo_post`` resync everything (the restored base meshes and
-results are compared with the caches); ``load_post`` drops the caches and
-rebuilds. Every handler is ``@persistent`` (survives file loads) and removed
-on unregister.
+results are compared with the caches); ``load_post`` drops the caches, moves
+modifiers of older files to the current node group, and resyncs. Every handler
+is ``@persistent`` (survives file loads) and removed on unregister.
 """
 from __future__ import annotations
 
-import traceback
+import contextlib
+import logging
 
 import bpy
 from bpy.app.handlers import persistent
 
-from . import engine, ids
-from .progress import Progress
+from . import engine, ids, results
 from . import geometry_nodes as gn
+from .errors import PREFIX
+from .progress import Progress
+
+log = logging.getLogger(__name__)
 
 _busy = False  # re-entrancy guard: our own writes trigger depsgraph updates
+_progress_callback = None  # set by the api around the evaluations it triggers
+_outcomes = None  # {state key: sync results} of the handler syncs during sync_now's evaluation
+_watch = results.Watch()
+_errors: dict[tuple, str] = {}  # state key -> current error message (shown in the status bar)
+status_message = None  # what _status_text last put in the status bar (None: the default)
 
 
 def _window_manager():
     """The UI's window manager for progress; None in background mode."""
     return None if bpy.app.background else bpy.context.window_manager
-
-
-status_message = None  # what _status_text last put in the status bar (None: the default)
 
 
 def _status_text(message) -> None:
@@ -53,17 +67,21 @@ def _status_text(message) -> None:
             pass
 
 
-_shown: tuple = ()  # errors last shown (console, status bar): shown once, not per update
+def _record(key: tuple, name: str, messages: list) -> None:
+    """Remember the object's current errors; log each new one once."""
+    text = "; ".join(messages)
+    if text and _errors.get(key) != f"{name}: {text}":
+        log.error("%s: %s", name, text)
+    if text:
+        _errors[key] = f"{name}: {text}"
+    else:
+        _errors.pop(key, None)
 
 
-def _show_errors(errors) -> None:
-    global _shown
-    if tuple(errors) != _shown:
-        for message in errors:
-            if message not in _shown:
-                print(message)
-        _status_text(errors[0] if errors else None)
-        _shown = tuple(errors)
+def _show_errors() -> None:
+    first = next(iter(_errors.values()), None)
+    if first != status_message:
+        _status_text(first)
 
 
 def _live(scene) -> bool:
@@ -71,105 +89,189 @@ def _live(scene) -> bool:
     return props is None or props.live_update
 
 
-def _sync_objects(objects, force=False) -> None:
+@contextlib.contextmanager
+def reporting_to(callback):
+    """Syncs done by the handlers inside this block report progress to `callback`."""
+    global _progress_callback
+    previous, _progress_callback = _progress_callback, callback
+    try:
+        yield
+    finally:
+        _progress_callback = previous
+
+
+def _sync_one(obj, depsgraph, force: bool) -> None:
+    mods = gn.gerbs_modifiers(obj)
+    if not mods or not engine.is_active(obj, mods[0]):
+        return
+    key = engine.state_key(obj, mods[0])
+    try:
+        with Progress(callback=_progress_callback, window_manager=_window_manager()) as progress:
+            outcome = engine.sync_object(obj, depsgraph, force=force, progress=progress)
+        _record(key, obj.name, [r.message for r in outcome if r.status == "error"])
+        if _outcomes is not None:
+            _outcomes[key] = outcome
+    except Exception:  # a handler must never raise into Blender
+        log.exception("GERBS: sync of %s failed", obj.name)
+        message = f"{PREFIX}internal error (see the system console)"
+        for mod in mods:
+            engine.set_error(obj, mod, message)
+        _record(key, obj.name, [message])
+
+
+def _collect() -> None:
+    results.collect_garbage()
+    alive = {engine.state_key(o, m) for o in engine.gerbs_objects() for m in gn.gerbs_modifiers(o)}
+    engine.prune(alive)
+    for key in [k for k in _errors if k not in alive]:
+        del _errors[key]
+
+
+def _run(objects, depsgraph, garbage: bool, force: bool = False) -> None:
     global _busy
     if _busy:
         return
     _busy = True
     try:
-        errors = []
         for obj in objects:
-            try:
-                with Progress(window_manager=_window_manager()) as progress:
-                    results = engine.sync_object(obj, force=force, progress=progress)
-                errors += [f"{obj.name}: {r.message}" for r in results if r.status == "error"]
-            except Exception:  # a handler must never raise into Blender
-                traceback.print_exc()
-                for mod in gn.gerbs_modifiers(obj):
-                    engine._set_error(obj, mod, "GERBS: internal error (see console)")
-        _show_errors(errors)
-        engine.collect_garbage()
+            _sync_one(obj, depsgraph, force)
+        if garbage:
+            _collect()
+        _show_errors()
     finally:
+        _watch.seen()
         _busy = False
 
 
-def _changed_objects(depsgraph):
-    changed, meshes, groups = [], set(), False
+def _candidates(depsgraph):
+    """(GERBS objects whose geometry changed, whether a synced object lost its modifier)."""
+    objects, lost = [], False
     for update in depsgraph.updates:
-        idb = update.id.original
-        if isinstance(idb, bpy.types.Object):
-            if idb.type == "MESH" and not idb.get(ids.RESULT_TAG) and gn.gerbs_modifiers(idb):
-                changed.append(idb)
-        elif isinstance(idb, bpy.types.Mesh):
-            meshes.add(idb.name)
-        elif isinstance(idb, bpy.types.GeometryNodeTree) and gn.is_gerbs_group(idb):
-            groups = True
-    if meshes or groups:
-        seen = {o.name for o in changed}
-        for obj in engine.gerbs_objects():
-            if obj.name not in seen and (groups or obj.data.name in meshes):
-                changed.append(obj)
-    return changed
+        idb = update.id
+        if not isinstance(idb, bpy.types.Object) or idb.type != "MESH":
+            continue
+        if not (update.is_updated_geometry or update.is_updated_shading):
+            continue
+        obj = idb.original
+        if gn.gerbs_modifiers(obj):
+            objects.append(obj)
+        elif engine.known(obj):  # its GERBS modifier was removed or applied
+            lost = True
+    return objects, lost
+
+
+def sync_now(obj, *, force: bool = False, progress=None):
+    """Evaluate the depsgraph (the handlers sync pending edits, reporting to
+    `progress`), then sync `obj` explicitly (a rebuild if `force`; else usually
+    "unchanged"). Returns the sync results of its GERBS modifiers."""
+    global _busy, _outcomes
+    mods = gn.gerbs_modifiers(obj)
+    key = engine.state_key(obj, mods[0]) if mods else None
+    _outcomes = {}
+    try:
+        with reporting_to(progress):
+            depsgraph = bpy.context.evaluated_depsgraph_get()
+        done = _outcomes.get(key)
+    finally:
+        _outcomes = None
+    if done is not None and not force:  # the handler just synced it
+        return done
+    if _busy:
+        return []
+    _busy = True
+    try:
+        outcome = engine.sync_object(obj, depsgraph, force=force, progress=progress)
+        if key is not None:
+            _record(key, obj.name, [r.message for r in outcome if r.status == "error"])
+        _show_errors()
+        return outcome
+    finally:
+        _watch.seen()
+        _busy = False
+
+
+def collect_now() -> None:
+    """Collect garbage now (after the api removed or applied a modifier)."""
+    _collect()
+    _show_errors()
+    _watch.seen()
 
 
 @persistent
 def on_depsgraph_update(scene, depsgraph) -> None:
-    if _busy or not _live(scene):
+    """depsgraph_update_post and frame_change_post (both get the evaluated depsgraph).
+
+    Costs O(updates): no object updated -> nothing (an O(1) query); deleted
+    data-blocks show as a Scene update, and only then are the data-block counts
+    compared (a deletion changes them)."""
+    if _busy or not depsgraph.id_type_updated("OBJECT"):
         return
-    objects = _changed_objects(depsgraph)
-    if objects:
-        _sync_objects(objects)
-    elif any(isinstance(u.id, bpy.types.Object) for u in depsgraph.updates):
-        # a modifier may have been removed: drop its result object
-        _sync_objects([])
+    objects, lost = _candidates(depsgraph)
+    garbage = lost or (depsgraph.id_type_updated("SCENE") and _watch.changed())
+    if not _live(scene):
+        objects = []
+    if objects or garbage:
+        _run(objects, depsgraph, garbage)
+
+
+def _upgrade_all() -> None:
+    for obj in engine.gerbs_objects():
+        for mod in gn.gerbs_modifiers(obj):
+            if gn.upgrade(mod):
+                log.info("GERBS: %s: modifier %r moved to node group version %d",
+                         obj.name, mod.name, ids.GROUP_VERSION)
+
+
+def resync_all(force: bool = False) -> None:
+    """Sync every GERBS object now (after register, undo, redo and file loads: edits
+    made meanwhile are picked up). A no-op while Blender restricts bpy.data."""
+    try:
+        _upgrade_all()
+        objects = engine.gerbs_objects()
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+    except AttributeError:  # bpy.data is _RestrictData during add-on registration at startup
+        return
+    _run(objects, depsgraph, garbage=True, force=force)
 
 
 @persistent
 def on_undo_redo(scene, *args) -> None:
-    _sync_objects(engine.gerbs_objects())
-
-
-def resync_all() -> None:
-    """Sync every GERBS object now (after register: edits made while the add-on was
-    off are picked up). A no-op while Blender restricts bpy.data (startup)."""
-    try:
-        objects = engine.gerbs_objects()
-    except AttributeError:  # bpy.data is _RestrictData during add-on registration at startup
-        return
-    _sync_objects(objects)
+    resync_all()
 
 
 @persistent
 def on_load(*args) -> None:
     engine.clear_caches()
-    _sync_objects(engine.gerbs_objects())
+    _errors.clear()
+    resync_all()
 
 
 _HANDLERS = (
     ("depsgraph_update_post", on_depsgraph_update),
+    ("frame_change_post", on_depsgraph_update),
     ("undo_post", on_undo_redo),
     ("redo_post", on_undo_redo),
     ("load_post", on_load),
 )
 
 
+def _remove(name, func) -> None:
+    lst = getattr(bpy.app.handlers, name)
+    # also stale copies from an earlier load of this module (script reload)
+    for old in [f for f in lst if getattr(f, "__name__", None) == func.__name__
+                and getattr(f, "__module__", None) == func.__module__]:
+        lst.remove(old)
+
+
 def register() -> None:
     for name, func in _HANDLERS:
-        lst = getattr(bpy.app.handlers, name)
-        # drop stale copies from an earlier load of this module (script reload)
-        for old in [f for f in lst if getattr(f, "__name__", None) == func.__name__
-                    and getattr(f, "__module__", None) == func.__module__]:
-            lst.remove(old)
-        lst.append(func)
+        _remove(name, func)
+        getattr(bpy.app.handlers, name).append(func)
 
 
 def unregister() -> None:
-    global _shown
-    if _shown:  # our message must not outlive the add-on in the status bar
+    if status_message is not None:  # our message must not outlive the add-on in the status bar
         _status_text(None)
-    _shown = ()
+    _errors.clear()
     for name, func in _HANDLERS:
-        lst = getattr(bpy.app.handlers, name)
-        for old in [f for f in lst if getattr(f, "__name__", None) == func.__name__
-                    and getattr(f, "__module__", None) == func.__module__]:
-            lst.remove(old)
+        _remove(name, func)

@@ -30,9 +30,27 @@ SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
 NODE_GROUP_NAME = "GERBS Blending Surface"
 MODIFIER_NAME = "GERBS Blending Surface"
 GROUP_TAG = "gerbs_group_version"  # custom property on the node group
-GROUP_VERSION = 1
-RESULT_TAG = "gerbs_result"  # custom property on each hidden result object
+GROUP_VERSION = 2  # 2: the group checks the result against the geometry it receives
+RESULT_TAG = "gerbs_result"  # custom property on each hidden result object and its mesh
 RESULT_NAME = "GERBS Result"  # prefix of the result object / mesh names
+
+# --- the input a result was built from, stored on the result mesh ---------------
+# Hidden attributes ("." prefix); the node group compares them with the geometry
+# the modifier receives and strips them from its output. Each uses the first
+# V / C / F elements of its domain (a surface has P >= V points, 3T >= C corners
+# and T >= F triangles).
+SNAPSHOT_PREFIX = ".gerbs_src_"  # (no other attribute starts with it)
+SNAP_POSITION = ".gerbs_src_position"  # POINT, FLOAT_VECTOR: base vertex positions
+SNAP_NORMAL = ".gerbs_src_normal"  # POINT, FLOAT_VECTOR: vertex normals (Use Custom Normals)
+SNAP_COUNT = ".gerbs_src_count"  # POINT, INT: (V, F, C) on points 0, 1, 2
+SNAP_CORNER = ".gerbs_src_corner"  # CORNER, INT: vertex of each base face corner
+SNAP_FACE_SIZE = ".gerbs_src_face_size"  # FACE, INT: corners of each base face
+SNAP_MATERIAL = ".gerbs_src_material"  # FACE, INT: material index of each base face
+SNAPSHOT_ATTRIBUTES = (SNAP_POSITION, SNAP_NORMAL, SNAP_COUNT, SNAP_CORNER, SNAP_FACE_SIZE,
+                       SNAP_MATERIAL)
+
+STALE_MESSAGE = ("GERBS: the surface is out of date with this mesh or its settings, so the "
+                 "base mesh is shown; enable the GERBS Blending Surface add-on to update it")
 
 # enum-like settings: python value -> menu item label (in this order)
 KERNELS = {"erbs": "ERBS", "bfbs": "BFBS", "logistic": "Logistic", "affine": "Affine"}
@@ -53,6 +71,8 @@ class SocketSpec:
     description: str = ""
     items: dict | None = None  # menu sockets: python value -> label
     hidden: bool = False  # internal: not shown in the modifier panel
+    scale: float = 1.0  # api value = socket value * scale (memory budget: MB -> bytes)
+    shape: bool = True  # changes the surface (checked by the node group); else only the build
 
 
 SETTINGS = (
@@ -82,6 +102,9 @@ SETTINGS = (
                description="Boundary vertices: keep the corners or straighten the border"),
     SocketSpec("use_normals", "Use Custom Normals", "NodeSocketBool", False,
                description="Use the base mesh's vertex normals as Hermite data"),
+    SocketSpec("memory_budget", "Memory Budget (MB)", "NodeSocketFloat", 2000.0, 1.0, 1.0e6,
+               "Largest memory (MB) a build may use; larger builds are refused with an error",
+               scale=1.0e6, shape=False),
 )
 INTERNAL = (
     SocketSpec("result", "Result", "NodeSocketObject", hidden=True,
@@ -89,5 +112,15 @@ INTERNAL = (
     SocketSpec("error", "Error", "NodeSocketString", "", hidden=True,
                description="Last error of the add-on; shown as a node warning"),
 )
+SHAPE_SETTINGS = tuple(s for s in SETTINGS if s.shape)
+# The settings the result was built from (written by the add-on after each build;
+# the node group shows the base mesh while they differ from the current settings).
+# Menus and booleans as INT (menu: item position), ints as INT, floats as FLOAT;
+# -1 never matches a valid setting.
+BUILT = tuple(
+    SocketSpec(f"built_{s.key}", f"Built {s.name}",
+               "NodeSocketFloat" if s.socket_type == "NodeSocketFloat" else "NodeSocketInt",
+               -1, hidden=True, description=f"{s.name} the result was built with (internal)")
+    for s in SHAPE_SETTINGS)
 SETTING_KEYS = tuple(s.key for s in SETTINGS)
-DEFAULTS = {s.key: s.default for s in SETTINGS}
+DEFAULTS = {s.key: s.default * s.scale if s.scale != 1.0 else s.default for s in SETTINGS}

@@ -24,7 +24,7 @@ class OBJECT_OT_gerbs_add_surface(bpy.types.Operator):
     def execute(self, context):
         obj = context.active_object
         with Progress(window_manager=context.window_manager) as progress:
-            try:
+            try:  # settings are validated by api.add_surface before anything is added
                 mod = api.add_surface(obj, progress=progress, raise_errors=False,
                                       **settings_from(self))
             except ValueError as exc:

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import bpy
 
+from gerbs_core.errors import GERBSError
+
 from . import api, ids
 
 
@@ -21,7 +23,7 @@ class OBJECT_OT_gerbs_apply(bpy.types.Operator):
     def execute(self, context):
         try:
             api.apply(context.active_object)
-        except (ValueError, RuntimeError) as exc:
+        except GERBSError as exc:
             self.report({"ERROR"}, str(exc))
             return {"CANCELLED"}
         return {"FINISHED"}

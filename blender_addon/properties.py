@@ -13,7 +13,11 @@ from . import ids
 
 
 def settings_annotations() -> dict:
-    """bpy.props for every setting (menus as enums with upper-case identifiers)."""
+    """bpy.props for every setting (menus as enums with upper-case identifiers).
+
+    Ranges are soft (slider) limits only: a value outside them reaches
+    ``settings.validate`` and is refused with a message instead of being
+    clamped silently."""
     out = {}
     for spec in ids.SETTINGS:
         if spec.items:
@@ -22,10 +26,12 @@ def settings_annotations() -> dict:
                                          items=items, default=spec.default.upper())
         elif spec.socket_type == "NodeSocketFloat":
             out[spec.key] = FloatProperty(name=spec.name, description=spec.description,
-                                          default=spec.default, min=spec.min, max=spec.max)
+                                          default=spec.default, soft_min=spec.min,
+                                          soft_max=spec.max)
         elif spec.socket_type == "NodeSocketInt":
             out[spec.key] = IntProperty(name=spec.name, description=spec.description,
-                                        default=spec.default, min=spec.min, max=spec.max)
+                                        default=spec.default, soft_min=spec.min,
+                                        soft_max=spec.max)
         else:
             out[spec.key] = BoolProperty(name=spec.name, description=spec.description,
                                          default=spec.default)
@@ -37,7 +43,11 @@ def settings_from(props) -> dict:
     out = {}
     for spec in ids.SETTINGS:
         value = getattr(props, spec.key)
-        out[spec.key] = value.lower() if spec.items else value
+        if spec.items:
+            value = value.lower()
+        elif spec.scale != 1.0:
+            value = value * spec.scale  # e.g. the memory budget: MB in the UI, bytes in the api
+        out[spec.key] = value
     return out
 
 

@@ -5,110 +5,340 @@
     .venv/bin/python scripts/gerbs_surface.py examples/suzanne.obj -o out.glb
     .venv/bin/python scripts/gerbs_surface.py in.ply -o out.obj --resolution 6 --degree 3
 
-Reads OBJ, glTF (.gltf/.glb), PLY or STL with Blender's own importers (vertices
-merged for glTF/STL, whose files split them), adds the GERBS Blending Surface
-modifier to every imported mesh (``blender_addon.api``), and writes OBJ or glTF
-(by the output extension) with Blender's exporters, modifiers applied. A text
-progress bar goes to stderr. An invalid mesh prints the problem and its
-location and exits with status 2 without writing anything.
+Reads OBJ, glTF (.gltf/.glb), PLY or STL with Blender's own importers, adds the
+GERBS Blending Surface modifier to every imported mesh (``blender_addon.api``),
+and writes OBJ or glTF (by the output extension) with Blender's exporters,
+modifiers applied. What reaches the surface is the mesh as stored; see
+:func:`import_mesh` for what each importer does and ``--merge-distance``.
+
+Safety: paths are checked before anything is read (the output may not be the
+input, a directory, or below a file; a glTF input may only reference files in
+its own folder), the result is exported into a temporary folder beside the
+output and renamed into place (a .gltf and its .bin side by side), and no
+output file may replace a file the input uses. Every problem the user can cause
+ends in one ``error: ...`` line on stderr and exit status 2 with nothing written
+(the input is never written).
 """
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import shutil
+import struct
 import sys
+import tempfile
+import urllib.parse
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "examples" / "suzanne.obj"
 INPUTS = (".obj", ".gltf", ".glb", ".ply", ".stl")
 OUTPUTS = (".obj", ".gltf", ".glb")
+USER_ERROR = 2
+
+
+class UserError(Exception):
+    """A problem with the command line or the files: one line, exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line instead of usage + message
+        raise UserError(message)
 
 
 def parse_args(argv):
-    p = argparse.ArgumentParser(description="GERBS blending surface of a mesh file (headless Blender)")
+    p = _Parser(description="GERBS blending surface of a mesh file (headless Blender)")
     p.add_argument("input", nargs="?", type=Path, default=SAMPLE,
                    help=f"mesh file {INPUTS} (default: the bundled {SAMPLE.relative_to(ROOT)})")
     p.add_argument("-o", "--output", type=Path, default=None,
-                   help=f"output {OUTPUTS} (default: out/<input name>_gerbs.glb under the current directory)")
-    p.add_argument("--resolution", type=int, default=4, help="segments per mesh edge (default 4)")
+                   help=f"output {OUTPUTS} (default: out/<input name>_gerbs.glb under the "
+                        "current directory)")
+    p.add_argument("--resolution", type=int, default=4,
+                   help="segments per mesh edge, 1..64 (default 4)")
     p.add_argument("--degree", type=int, default=2, help="local polynomial degree 0..3 (default 2)")
     p.add_argument("--kernel", default="erbs", choices=["erbs", "bfbs", "logistic", "affine"])
     p.add_argument("--mode", default="regular", choices=["regular", "metric"])
     p.add_argument("--boundary", default="keep", choices=["keep", "straighten"])
     for name in ("alpha", "beta", "gamma", "lam", "sigma"):
         p.add_argument(f"--{name}", type=float, default=None, help=f"ERBS parameter {name}")
+    p.add_argument("--bfbs-left", type=int, default=None, help="BFBS exponent i_left (default 2)")
+    p.add_argument("--bfbs-right", type=int, default=None, help="BFBS exponent i_right (default 2)")
+    p.add_argument("--memory-budget", type=float, default=None, metavar="MB",
+                   help="largest memory a build may use, in MB (default 2000)")
+    p.add_argument("--merge-distance", type=float, default=None, metavar="D",
+                   help="weld vertices closer than D (Blender's Merge by Distance; 0: only "
+                        "coincident ones) before building; off by default")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     if args.output is None:
-        args.output = Path.cwd() / "out" / f"{args.input.stem}_gerbs.glb"
-    if args.input.suffix.lower() not in INPUTS:
-        p.error(f"input must be one of {INPUTS}, got {args.input.name}")
-    if args.output.suffix.lower() not in OUTPUTS:
-        p.error(f"output must be one of {OUTPUTS}, got {args.output.name}")
-    if not args.input.is_file():
-        p.error(f"input file {args.input} does not exist")
+        args.output = Path("out") / f"{args.input.stem}_gerbs.glb"
+    if args.merge_distance is not None and not args.merge_distance >= 0:  # (also NaN)
+        raise UserError(f"--merge-distance must be >= 0, got {args.merge_distance}")
     return args
 
 
-def import_mesh(bpy, path: Path):
-    """Import with Blender's importer; return the new mesh objects."""
+def settings_from(args) -> dict:
+    """The surface settings, checked by the add-on's one validator."""
+    from blender_addon import settings as settings_mod
+
+    values = dict(resolution=args.resolution, degree=args.degree, kernel=args.kernel,
+                  mode=args.mode, boundary=args.boundary)
+    for name in ("alpha", "beta", "gamma", "lam", "sigma", "bfbs_left", "bfbs_right"):
+        if getattr(args, name) is not None:
+            values[name] = getattr(args, name)
+    if args.memory_budget is not None:
+        if not 1.0 <= args.memory_budget <= 1.0e6:  # (also NaN)
+            raise UserError(f"--memory-budget: must be in [1, 1e+06] MB, got {args.memory_budget}")
+        values["memory_budget"] = args.memory_budget * 1e6
+    try:
+        return settings_mod.validate(values)
+    except ValueError as exc:  # InvalidParameterError "name: message"
+        name = getattr(exc, "name", "")
+        raise UserError(f"--{name.replace('_', '-')}{str(exc)[len(name):]}") from None
+
+
+# --- paths ----------------------------------------------------------------------
+
+def _absolute(path: Path) -> Path:
+    return Path(os.path.abspath(path))
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    if a.resolve() == b.resolve():
+        return True
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def check_paths(args) -> tuple[Path, Path]:
+    """(input, output) as absolute paths; refuses what would read or write the wrong file."""
+    src, out = _absolute(args.input), _absolute(args.output)
+    if src.suffix.lower() not in INPUTS:
+        raise UserError(f"input must be one of {', '.join(INPUTS)}, got {args.input.name}")
+    if out.suffix.lower() not in OUTPUTS:
+        raise UserError(f"output must be one of {', '.join(OUTPUTS)}, got {args.output.name}")
+    if not src.exists():
+        raise UserError(f"input file {args.input} does not exist")
+    if not src.is_file():
+        raise UserError(f"input {args.input} is not a file")
+    if src.stat().st_size == 0:
+        raise UserError(f"input file {args.input} is empty")
+    if _same_file(src, out):
+        raise UserError(f"output {args.output} is the input file; choose another name")
+    if out.is_dir():
+        raise UserError(f"output {args.output} is a directory; give a file name")
+    ancestor = out.parent
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise UserError(f"cannot write {args.output}: {ancestor} is not a directory")
+    return src, out
+
+
+def _gltf_document(path: Path) -> dict:
+    data = path.read_bytes()
+    if path.suffix.lower() == ".glb":
+        if len(data) < 20 or data[:4] != b"glTF":
+            raise UserError(f"{path.name} is not a binary glTF (.glb) file")
+        version, length = struct.unpack_from("<II", data, 4)
+        chunk_length, chunk_type = struct.unpack_from("<I4s", data, 12)
+        if version != 2 or chunk_type != b"JSON" or 20 + chunk_length > min(length, len(data)):
+            raise UserError(f"{path.name} is not a glTF 2.0 binary file (bad header)")
+        data = data[20:20 + chunk_length]
+    try:
+        doc = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError):
+        raise UserError(f"{path.name} is not a glTF file (its JSON cannot be read)") from None
+    if not isinstance(doc, dict):
+        raise UserError(f"{path.name} is not a glTF file (no JSON object)")
+    return doc
+
+
+def gltf_references(path: Path) -> list[Path]:
+    """The files a glTF input reads (buffers and images), all inside its folder."""
+    folder = path.parent.resolve()
+    refs = []
+    doc = _gltf_document(path)
+    for kind in ("buffers", "images"):
+        items = doc.get(kind) or []
+        for i, item in enumerate(items if isinstance(items, list) else []):
+            uri = item.get("uri") if isinstance(item, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:"):
+                continue
+            parts = urllib.parse.urlsplit(uri)
+            target = (folder / urllib.parse.unquote(parts.path)).resolve()
+            if parts.scheme or parts.netloc or not target.is_relative_to(folder):
+                raise UserError(f"{path.name}: {kind}[{i}] refers to {uri!r}, outside the "
+                                f"input's folder; refusing to read it")
+            refs.append(target)
+    return refs
+
+
+# --- import ---------------------------------------------------------------------
+
+def split_fans(offsets, corners, n_vertices):
+    """Give every fan of faces around a vertex its own vertex.
+
+    Two corners at one vertex are in the same fan when their faces share an edge
+    at that vertex. A vertex whose corners form k > 1 fans (two surfaces that only
+    touch there, e.g. where Suzanne's eyes meet the head, once a format without
+    connectivity has been joined by position) becomes k vertices. Returns
+    (corners (C,), source vertex of every new vertex (V',)): the first V' = V
+    entries are the identity.
+    """
+    import numpy as np
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    sizes = np.diff(offsets)
+    n = len(corners)
+    face = np.repeat(np.arange(len(sizes)), sizes)
+    pos = np.arange(n) - offsets[face]
+    nxt = corners[offsets[face] + (pos + 1) % sizes[face]]
+    prv = corners[offsets[face] + (pos - 1) % sizes[face]]
+    # the two edges at each corner, as keys vertex * (V + 1) + other end
+    keys = np.tile(corners.astype(np.int64) * (n_vertices + 1), 2) + np.concatenate([nxt, prv])
+    order = np.argsort(keys, kind="stable")
+    same = keys[order[1:]] == keys[order[:-1]]
+    a, b = order[:-1][same] % n, order[1:][same] % n  # corners sharing an edge at their vertex
+    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+    _, fan = connected_components(graph, directed=False)
+    pairs, inverse = np.unique(np.stack([corners, fan], axis=1), axis=0, return_inverse=True)
+    # per vertex, the fan with the smallest label keeps the vertex; the others get new ones
+    keeps = np.r_[True, pairs[1:, 0] != pairs[:-1, 0]]
+    ids = pairs[:, 0].astype(np.int64)
+    extra = np.flatnonzero(~keeps)
+    ids[extra] = n_vertices + np.arange(len(extra))
+    source = np.concatenate([np.arange(n_vertices), pairs[extra, 0]])
+    return ids[inverse.ravel()].astype(corners.dtype), source
+
+
+def _weld(bpy, obj, distance: float) -> None:
+    import bmesh
+
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    bmesh.ops.remove_doubles(bm, verts=bm.verts, dist=distance)
+    bm.to_mesh(obj.data)
+    bm.free()
+
+
+def _separate_fans(obj) -> int:
+    """split_fans on an imported mesh (positions, faces and material indices kept);
+    returns the number of vertices added."""
+    import numpy as np
+
+    from blender_addon import mesh_io
+
+    mesh = obj.data
+    n_before = len(mesh.vertices)
+    offsets, corners = mesh_io.read_topology(mesh)  # (an imported mesh: nothing holds it)
+    new_corners, source = split_fans(offsets, corners, n_before)
+    if len(source) == n_before:
+        return 0
+    X = mesh_io.read_positions(mesh)[source]
+    materials = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("material_index", materials)
+    faces = [new_corners[a:b].tolist() for a, b in zip(offsets[:-1], offsets[1:])]
+    mesh.clear_geometry()  # (keeps the material slots)
+    mesh.from_pydata(X.tolist(), [], faces)
+    mesh.polygons.foreach_set("material_index", materials)
+    mesh.update()
+    return len(source) - n_before
+
+
+def import_mesh(bpy, path: Path, merge_distance):
+    """Import with Blender's importer; return the new mesh objects.
+
+    What reaches the surface: OBJ, PLY and glTF faces exactly as indexed in the
+    file (glTF exporters split vertices where normals or UVs differ, a PLY
+    exported with UVs is split at UV seams: the surface then has cracks there
+    unless ``merge_distance`` is given); STL has no connectivity: Blender's
+    importer joins corners at identical positions, and fans of faces that this
+    makes meet at a single vertex get their own vertices again (split_fans).
+    ``merge_distance``: Blender's Merge by Distance at that distance, then the
+    same fan separation.
+    """
     before = set(bpy.data.objects)
     ext = path.suffix.lower()
-    if ext == ".obj":
-        bpy.ops.wm.obj_import(filepath=str(path))
-    elif ext in (".gltf", ".glb"):
-        bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=True)
-    elif ext == ".ply":
-        bpy.ops.wm.ply_import(filepath=str(path))
-    elif ext == ".stl":
-        bpy.ops.wm.stl_import(filepath=str(path))
+    try:
+        if ext == ".obj":
+            bpy.ops.wm.obj_import(filepath=str(path))
+        elif ext in (".gltf", ".glb"):
+            bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=False)
+        elif ext == ".ply":
+            bpy.ops.wm.ply_import(filepath=str(path))
+        else:
+            bpy.ops.wm.stl_import(filepath=str(path))
+    except RuntimeError as exc:
+        from blender_addon.errors import operator_message
+        raise UserError(f"cannot read {path.name}: {operator_message(exc)}") from None
     objects = [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
-    if ext in (".stl", ".gltf", ".glb"):
-        import bmesh
-        for obj in objects:  # these formats duplicate vertices per face / per seam
-            bm = bmesh.new()
-            bm.from_mesh(obj.data)
-            bmesh.ops.remove_doubles(bm, verts=bm.verts, dist=1e-7)
-            bm.to_mesh(obj.data)
-            bm.free()
+    for obj in objects:
+        if merge_distance is not None:
+            _weld(bpy, obj, merge_distance)
+        if merge_distance is not None or ext == ".stl":
+            _separate_fans(obj)
     return objects
 
 
-def export_mesh(bpy, objects, path: Path) -> None:
+# --- export ---------------------------------------------------------------------
+
+def export_mesh(bpy, objects, out: Path, protected) -> None:
+    """Export into a temporary folder beside `out`, then rename every file into
+    place (sidecars first); refuse if one would replace a `protected` file."""
     bpy.ops.object.select_all(action="DESELECT")
     for obj in objects:
         obj.select_set(True)
     bpy.context.view_layer.objects.active = objects[0]
-    ext = path.suffix.lower()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if ext == ".obj":
-        bpy.ops.wm.obj_export(filepath=str(path), export_selected_objects=True,
-                              apply_modifiers=True, export_materials=False)
-    else:
-        bpy.ops.export_scene.gltf(filepath=str(path), use_selection=True, export_apply=True,
-                                  export_format="GLB" if ext == ".glb" else "GLTF_SEPARATE")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".gerbs-", dir=out.parent))
+    except OSError as exc:
+        raise UserError(f"cannot write {out}: {exc.strerror}") from None
+    try:
+        target = tmp / out.name
+        ext = out.suffix.lower()
+        if ext == ".obj":
+            bpy.ops.wm.obj_export(filepath=str(target), export_selected_objects=True,
+                                  apply_modifiers=True, export_materials=False)
+        else:
+            bpy.ops.export_scene.gltf(filepath=str(target), use_selection=True, export_apply=True,
+                                      export_format="GLB" if ext == ".glb" else "GLTF_SEPARATE")
+        produced = sorted(tmp.iterdir(), key=lambda p: p.name == out.name)  # main file last
+        for p in produced:
+            dest = out.parent / p.name
+            if any(_same_file(dest, q) for q in protected if q.exists()):
+                raise UserError(f"writing {out.name} would replace {dest.name}, which the "
+                                f"input uses; choose another output name or folder")
+        for p in produced:
+            os.replace(p, out.parent / p.name)
+    except OSError as exc:
+        raise UserError(f"cannot write {out}: {exc.strerror or exc}") from None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
-def main(argv=None) -> int:
-    args = parse_args(sys.argv[1:] if argv is None else argv)
-    sys.path.insert(0, str(ROOT))
+def run(args, src: Path, out: Path, protected) -> None:
+    settings = settings_from(args)
     import bpy
 
     import blender_addon
     from blender_addon import api
     from blender_addon.progress import silent, text_bar
 
+    import logging
+
+    logging.getLogger("blender_addon").setLevel(logging.CRITICAL)  # errors are ours to print
     bpy.ops.wm.read_factory_settings(use_empty=True)
     blender_addon.register()
     try:
-        objects = import_mesh(bpy, args.input)
+        objects = import_mesh(bpy, src, args.merge_distance)
         if not objects:
-            print(f"error: {args.input} contains no mesh", file=sys.stderr)
-            return 1
-        settings = dict(resolution=args.resolution, degree=args.degree, kernel=args.kernel,
-                        mode=args.mode, boundary=args.boundary)
-        settings.update({k: getattr(args, k) for k in ("alpha", "beta", "gamma", "lam", "sigma")
-                         if getattr(args, k) is not None})
+            raise UserError(f"{args.input} contains no mesh")
         for obj in objects:
             if not args.quiet:
                 print(f"{obj.name}: {len(obj.data.vertices)} vertices, "
@@ -116,19 +346,34 @@ def main(argv=None) -> int:
             try:
                 api.add_surface(obj, progress=silent if args.quiet else text_bar(), **settings)
             except ValueError as exc:
-                print(f"\nerror: {obj.name} in {args.input}: {exc}", file=sys.stderr)
-                return 2
+                raise UserError(f"{obj.name} in {args.input}: {exc}") from None
             if not args.quiet:
                 info = api.status(obj)
                 print(f"{obj.name}: surface with {info['points']} points, "
                       f"{info['triangles']} triangles in {info['build_seconds']:.2f} s",
                       file=sys.stderr)
         bpy.context.view_layer.update()
-        export_mesh(bpy, objects, args.output)
-        print(f"wrote {args.output}", file=sys.stderr)
-        return 0
+        export_mesh(bpy, objects, out, protected)
     finally:
         blender_addon.unregister()
+
+
+def main(argv=None) -> int:
+    sys.path.insert(0, str(ROOT))
+    try:
+        args = parse_args(sys.argv[1:] if argv is None else argv)
+        src, out = check_paths(args)
+        gltf = src.suffix.lower() in (".gltf", ".glb")
+        protected = [src] + (gltf_references(src) if gltf else [])
+        if any(_same_file(out, p) for p in protected if p.exists()):
+            raise UserError(f"output {args.output} is a file the input uses; choose another name")
+        run(args, src, out, protected)
+    except UserError as exc:
+        message = " ".join(str(exc).split())  # one line, whatever the message held
+        print(f"\nerror: {message}", file=sys.stderr)
+        return USER_ERROR
+    print(f"wrote {out}", file=sys.stderr)
+    return 0
 
 
 if __name__ == "__main__":

@@ -45,12 +45,20 @@ from .base import Kernel, as_float_array
 __all__ = ["BFBS"]
 
 
+# Largest exponent accepted. F is normalized by 1 / B(i_left + 1, i_right + 1),
+# which leaves float64 beyond i_left + i_right ~ 1070 (B(501, 501) ~ 3.7e-303), and
+# the Bernstein form's binomials binom(i_left + i_right + 1, k) beyond ~1029; at
+# 500 + 500 both are still finite and F agrees with betainc to 6e-14.
+MAX_EXPONENT = 500
+
+
 def _exponent(name, v):
     if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
         raise InvalidParameterError(name, f"must be a real number, got {v!r}")
     v = float(v)
-    if not math.isfinite(v) or v < 0.0:
-        raise InvalidParameterError(name, f"exponent must be finite and >= 0, got {v}")
+    if not math.isfinite(v) or not 0.0 <= v <= MAX_EXPONENT:
+        raise InvalidParameterError(
+            name, f"exponent must be finite and in [0, {MAX_EXPONENT}], got {v}")
     return v
 
 
@@ -83,7 +91,7 @@ class BFBS(Kernel):
 
     Parameters
     ----------
-    i_left, i_right : float >= 0 (integers give the Bernstein form)
+    i_left, i_right : float in [0, MAX_EXPONENT = 500] (integers give the Bernstein form)
 
     Values: for integer exponents the Bernstein form (positive terms, see
     :meth:`_bernstein`), else scipy.special.betainc (both accurate to a few
@@ -147,14 +155,14 @@ class BFBS(Kernel):
             lo = np.zeros_like(x)
             for k in range(n, a - 1, -1):            # Horner over k = n..a
                 lo *= u
-                lo += math.comb(n, k)
+                lo += float(math.comb(n, k))  # (an int > 2**63 would be an object)
             lo *= _ipow(u, a)
             lo *= _ipow(omx, n)
             v = omx / x
             hi = np.zeros_like(x)
             for j in range(n, n - a, -1):            # j = n..n-a+1
                 hi *= v
-                hi += math.comb(n, j)
+                hi += float(math.comb(n, j))
             hi *= _ipow(v, n - a + 1)
             hi *= _ipow(x, n)
             hi = 1.0 - hi
@@ -196,5 +204,5 @@ class BFBS(Kernel):
         il, n = int(self.i_left), int(self.i_left + self.i_right + 1)
         out = np.zeros_like(x)
         for k in range(il + 1, n + 1):
-            out += comb(n, k, exact=True) * x ** k * (1.0 - x) ** (n - k)
+            out += float(comb(n, k, exact=True)) * x ** k * (1.0 - x) ** (n - k)
         return out[()] if out.ndim == 0 else out

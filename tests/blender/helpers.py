@@ -58,9 +58,47 @@ def topology(mesh):
 
 
 def evaluated(obj) -> np.ndarray:
+    """Positions of the object's final evaluated mesh (in Edit Mode through to_mesh:
+    the evaluated object's data is the edit cage there)."""
     dg = bpy.context.evaluated_depsgraph_get()
     dg.update()
-    return positions(obj.evaluated_get(dg).data)
+    obj_eval = obj.evaluated_get(dg)
+    if obj.mode != "EDIT":
+        return positions(obj_eval.data)
+    try:
+        return positions(obj_eval.to_mesh())
+    finally:
+        obj_eval.to_mesh_clear()
+
+
+def base_positions(obj) -> np.ndarray:
+    """Positions of the mesh data-block as evaluated (reading the original mesh's
+    positions from Python would un-share them and invalidate held references)."""
+    dg = bpy.context.evaluated_depsgraph_get()
+    return positions(obj.data.evaluated_get(dg))
+
+
+def modifier_input(obj) -> np.ndarray:
+    """Positions the (last) modifier receives: the evaluated mesh with it disabled."""
+    mod = obj.modifiers[-1]
+    mod.show_viewport = False
+    try:
+        return evaluated(obj)
+    finally:
+        mod.show_viewport = True
+
+
+def fresh_surface(X, offsets, corners, resolution, **kw) -> np.ndarray:
+    """The core's surface points (P, 3) built from scratch (no Blender involved)."""
+    from blender_addon.mesh_io import faces_from_csr
+    from gerbs_core.mesh_surface import BlendingSurface
+
+    faces = faces_from_csr(np.asarray(offsets), np.asarray(corners))
+    return BlendingSurface(np.asarray(X, dtype=np.float64), faces, **kw).tessellate(resolution)[0]
+
+
+def warnings(obj):
+    return [(w.type, w.message) for w in obj.modifiers[0].node_warnings]
 
 
 def evaluated_triangles(obj) -> np.ndarray:
@@ -84,3 +122,25 @@ def face_rings(offsets, corners, n_vertices, w, kmax=6) -> np.ndarray:
         ring[touched & (ring > k)] = k
         verts[corners[touched[face_of_corner]]] = True
     return ring
+
+
+def export_and_reimport(obj, path: Path):
+    """Export `obj` with its modifiers applied (glTF binary or OBJ by `path`'s suffix,
+    at the current frame) into an empty scene, re-import it; return the new object."""
+    bpy.ops.object.select_all(action="DESELECT")
+    obj.select_set(True)
+    if path.suffix == ".glb":
+        # (without export_current_frame the glTF exporter evaluates frame 0)
+        bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", use_selection=True,
+                                  export_apply=True, export_animations=False,
+                                  export_current_frame=True)
+    else:
+        bpy.ops.wm.obj_export(filepath=str(path), export_selected_objects=True,
+                              apply_modifiers=True, export_materials=False)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    if path.suffix == ".glb":
+        bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=True)
+    else:
+        bpy.ops.wm.obj_import(filepath=str(path))
+    (imported,) = [o for o in bpy.data.objects if o.type == "MESH"]
+    return imported

@@ -71,7 +71,7 @@ def test_bad_settings_are_refused(blender):
     from blender_addon import api
 
     obj = make_object("grid")
-    with pytest.raises(ValueError, match="unknown GERBS settings"):
+    with pytest.raises(ValueError, match="colour: unknown GERBS setting"):
         api.add_surface(obj, resolution=2, colour="red")
     with pytest.raises(ValueError, match="mode"):
         api.add_surface(obj, mode="bogus")
@@ -85,5 +85,5 @@ def test_too_large_resolution_is_an_error_not_a_crash(blender):
     obj = make_object("suzanne")
     X = positions(obj.data)
     with pytest.raises(GERBSSyncError, match="memory"):
-        api.add_surface(obj, resolution=64 * 64)
+        api.add_surface(obj, resolution=64, memory_budget=1e6)
     assert np.array_equal(evaluated(obj), X)

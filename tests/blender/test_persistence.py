@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from .helpers import evaluated, evaluated_triangles, make_object, positions, topology
+from .helpers import (evaluated, evaluated_triangles, export_and_reimport, make_object,
+                      positions, topology)
 
 pytestmark = pytest.mark.blender
 
@@ -83,22 +84,161 @@ def test_export_writes_surface_and_reimports_identically(blender, tmp_path, ext)
     obj = make_object("suzanne")
     api.add_surface(obj, resolution=2)
     P, T = evaluated(obj), evaluated_triangles(obj)
-    path = tmp_path / f"surface{ext}"
-    bpy.ops.object.select_all(action="DESELECT")
-    obj.select_set(True)
-    if ext == ".glb":
-        bpy.ops.export_scene.gltf(filepath=str(path), export_format="GLB", use_selection=True,
-                                  export_apply=True)
-    else:
-        bpy.ops.wm.obj_export(filepath=str(path), export_selected_objects=True,
-                              apply_modifiers=True, export_materials=False)
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    if ext == ".glb":
-        bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=True)
-    else:
-        bpy.ops.wm.obj_import(filepath=str(path))
-    (imported,) = [o for o in bpy.data.objects if o.type == "MESH"]
+    imported = export_and_reimport(obj, tmp_path / f"surface{ext}")
     Q = positions(imported.data)
     loops = np.empty(len(imported.data.loops), dtype=np.int32)
     imported.data.loops.foreach_get("vertex_index", loops)
     _same_geometry(P, T, Q, loops.reshape(-1, 3))
+
+
+def _save_with_surface(tmp_path, kind="suzanne", **settings):
+    from blender_addon import api
+
+    obj = make_object(kind)
+    api.add_surface(obj, **{"resolution": 3, **settings})
+    path = tmp_path / "gerbs.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return obj.name, evaluated(obj), path
+
+
+def test_file_edited_without_the_addon_never_shows_or_applies_a_stale_surface(blender, tmp_path):
+    """Saved with the add-on; opened without it; the base mesh is edited: the modifier
+    shows, applies and exports the edited base mesh (with a warning saying why), never
+    the saved surface; enabling the add-on brings the live surface back."""
+    import blender_addon
+
+    from .helpers import warnings
+
+    name, P_saved, path = _save_with_surface(tmp_path)
+    blender_addon.unregister()
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    obj = bpy.data.objects[name]
+    assert np.array_equal(evaluated(obj), P_saved)  # unedited: the saved surface is right
+    obj.data.vertices[0].co.z += 0.25
+    obj.data.update()
+    X = positions(obj.data)
+    assert np.array_equal(evaluated(obj), X)  # the edited base mesh, not the old surface
+    ((kind, message),) = warnings(obj)
+    assert kind == "WARNING" and "out of date" in message and "add-on" in message
+    out = tmp_path / "edited.glb"
+    bpy.ops.export_scene.gltf(filepath=str(out), export_format="GLB", export_apply=True)
+    blender_addon.register()  # the live surface comes back at once
+    P = evaluated(obj)
+    assert warnings(obj) == [] and len(P) == len(P_saved)
+    assert np.abs(P[0] - X[0]).max() <= 1e-6 and np.abs(P - P_saved).max() > 0.1
+    blender_addon.unregister()
+    obj.data.vertices[1].co.z += 0.25
+    obj.data.update()
+    X2 = positions(obj.data)
+    with bpy.context.temp_override(object=obj, active_object=obj):
+        bpy.ops.object.modifier_apply(modifier=obj.modifiers[0].name)
+    assert np.array_equal(positions(obj.data), X2)  # applied: the base, not a stale surface
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.import_scene.gltf(filepath=str(out))
+    (imported,) = [o for o in bpy.data.objects if o.type == "MESH"]
+    assert len(imported.data.vertices) < len(P_saved)  # the exported base mesh
+    blender_addon.register()
+
+
+def test_settings_changed_without_the_addon_show_the_base_mesh(blender, tmp_path):
+    import blender_addon
+
+    from .helpers import warnings
+
+    name, P_saved, path = _save_with_surface(tmp_path, kind="icosphere")
+    blender_addon.unregister()
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    obj = bpy.data.objects[name]
+    mod = obj.modifiers[0]
+    key = next(i.identifier for i in mod.node_group.interface.items_tree
+               if getattr(i, "name", "") == "Resolution")
+    mod[key] = 5
+    obj.update_tag()
+    assert np.array_equal(evaluated(obj), positions(obj.data))
+    assert "out of date" in warnings(obj)[0][1]
+    blender_addon.register()
+    assert len(evaluated(obj)) > len(P_saved) and warnings(obj) == []
+
+
+def test_file_edited_in_a_fresh_process_without_the_addon(blender, tmp_path):
+    """The same in a Blender process that never loaded the add-on: edit, apply, export."""
+    import subprocess
+    import sys
+
+    name, P_saved, path = _save_with_surface(tmp_path)
+    code = (
+        "import bpy, numpy as np, sys\n"
+        f"bpy.ops.wm.open_mainfile(filepath={str(path)!r})\n"
+        "assert 'blender_addon' not in sys.modules\n"
+        f"obj = bpy.data.objects[{name!r}]\n"
+        "obj.data.vertices[7].co.x += 0.3\n"
+        "obj.data.update()\n"
+        "bpy.context.view_layer.update()\n"
+        "with bpy.context.temp_override(object=obj, active_object=obj):\n"
+        "    bpy.ops.object.modifier_apply(modifier=obj.modifiers[0].name)\n"
+        "X = np.empty(3 * len(obj.data.vertices), np.float32)\n"
+        "obj.data.vertices.foreach_get('co', X)\n"
+        f"np.save({str(tmp_path / 'applied.npy')!r}, X.reshape(-1, 3))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    applied = np.load(tmp_path / "applied.npy")
+    obj = bpy.data.objects[name]
+    X = positions(obj.data)  # this process's copy: not edited
+    assert applied.shape == X.shape  # the base mesh was applied, not the saved surface
+    moved = np.flatnonzero(np.any(applied != X, axis=1))
+    assert moved.tolist() == [7] and abs(applied[7, 0] - X[7, 0] - 0.3) <= 1e-6
+
+
+def test_without_live_update_apply_and_export_never_bake_a_stale_surface(blender, tmp_path):
+    """Live Update off (nothing recomputes the surface): after an edit the modifier
+    shows and applies the edited base mesh; Rebuild brings the surface back."""
+    from blender_addon import api
+
+    from .helpers import warnings
+
+    obj = make_object("grid")
+    mod = api.add_surface(obj, resolution=3)
+    P = evaluated(obj)
+    bpy.context.scene.gerbs.live_update = False
+    obj.data.vertices[4].co.z += 0.5
+    obj.data.update()
+    X = positions(obj.data)
+    assert np.array_equal(evaluated(obj), X) and "out of date" in warnings(obj)[0][1]
+    api.update(obj)  # explicit update (the Rebuild button) still works
+    P2 = evaluated(obj)
+    assert len(P2) == len(P) and np.abs(P2[4] - X[4]).max() <= 1e-6 and warnings(obj) == []
+    obj.data.vertices[4].co.z -= 0.5
+    obj.data.update()
+    Y = positions(obj.data)
+    with bpy.context.temp_override(object=obj, active_object=obj):
+        bpy.ops.object.modifier_apply(modifier=mod.name)
+    assert np.array_equal(positions(obj.data), Y)  # the base as edited, not P2
+
+
+def test_modifiers_of_an_older_group_version_move_to_the_current_group_on_load(blender, tmp_path):
+    """A file saved by an add-on version whose group had no freshness check: on load its
+    modifiers move to the current group with their settings, and the old group goes."""
+    from blender_addon import api, ids
+    from blender_addon import geometry_nodes as gn
+
+    obj = make_object("icosphere")
+    mod = api.add_surface(obj, resolution=3, kernel="logistic", degree=1)
+    old = mod.node_group.copy()
+    old[ids.GROUP_TAG] = ids.GROUP_VERSION - 1
+    mod.node_group = old
+    for key, value in (("resolution", 3), ("kernel", "logistic"), ("degree", 1)):
+        gn.write_settings(mod, **{key: value})
+    name = obj.name
+    path = tmp_path / "old.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    obj = bpy.data.objects[name]
+    mod = obj.modifiers[0]
+    assert gn.is_current_group(mod.node_group)
+    got = api.get_settings(obj)
+    assert (got["resolution"], got["kernel"], got["degree"]) == (3, "logistic", 1)
+    assert [g for g in bpy.data.node_groups if gn.is_gerbs_group(g)] == [mod.node_group]
+    P = evaluated(obj)
+    assert len(P) > len(obj.data.vertices) and np.abs(P[:42] - positions(obj.data)).max() <= 1e-6

@@ -105,15 +105,19 @@ def test_unregister_while_in_use_keeps_data_and_reregister_catches_up(blender):
     for o in (a, b):
         assert _same_base(o, snaps[o.name])
         assert np.array_equal(evaluated(o), surfaces[o.name])  # last surface still shown
-    # edits while the add-on is off: no crash, the surface just does not follow
+    # edits while the add-on is off: no crash, and never the stale surface: the node
+    # group sees the edit and shows the edited base mesh with a warning
     a.data.vertices[3].co.z += 0.3
     a.data.update()
-    stale = evaluated(a)
-    assert np.array_equal(stale, surfaces[a.name])
+    shown = evaluated(a)
+    assert np.array_equal(shown, positions(a.data))
+    ((kind, message),) = _warnings(a)
+    assert kind == "WARNING" and "out of date" in message
     blender_addon.register()  # catches up with the edit at once
     Pa = evaluated(a)
+    assert len(Pa) == len(surfaces[a.name]) and _warnings(a) == []
     assert np.abs(Pa[3] - positions(a.data)[3]).max() <= 1e-6
-    assert np.abs(Pa - stale).max() > 0.05
+    assert np.abs(Pa - surfaces[a.name]).max() > 0.05
     assert np.array_equal(evaluated(b), surfaces[b.name])
     b.data.vertices[12].co.z += 0.2  # and live again
     b.data.update()
@@ -123,12 +127,14 @@ def test_unregister_while_in_use_keeps_data_and_reregister_catches_up(blender):
 def _reload_package():
     """What Reload Scripts does to an add-on: unregister, re-import, register."""
     import blender_addon
-    from blender_addon import (api, engine, geometry_nodes, handlers, ids, mesh_io, op_add_surface,
-                               op_apply, op_rebuild, op_remove, panels, progress, properties)
+    from blender_addon import (api, engine, errors, geometry_nodes, handlers, ids, mesh_io,
+                               node_tree, op_add_surface, op_apply, op_rebuild, op_remove, panels,
+                               progress, properties, results, settings, stencil_update)
 
     blender_addon.unregister()
-    for module in (ids, progress, geometry_nodes, mesh_io, engine, api, properties, panels,
-                   handlers, op_add_surface, op_apply, op_rebuild, op_remove, blender_addon):
+    for module in (ids, errors, settings, progress, node_tree, geometry_nodes, mesh_io,
+                   stencil_update, results, engine, handlers, api, properties, panels,
+                   op_add_surface, op_apply, op_rebuild, op_remove, blender_addon):
         importlib.reload(module)
     blender_addon.register()
 
@@ -216,7 +222,7 @@ def test_undo_redo_across_add_edit_apply_with_operators(blender):
 
 
 def test_undo_redo_across_add_and_remove_with_operators(blender):
-    from blender_addon import engine, ids
+    from blender_addon import handlers, ids
 
     obj = make_object("mixed")
     name = obj.name
@@ -242,7 +248,7 @@ def test_undo_redo_across_add_and_remove_with_operators(blender):
         _redo()  # added -> removed
         obj = bpy.data.objects[name]
         assert len(obj.modifiers) == 0 and np.array_equal(evaluated(obj), X)
-    engine.collect_garbage()
+    handlers.collect_now()
     _undo(2)  # back to the start: nothing of ours left
     obj = bpy.data.objects[name]
     assert len(obj.modifiers) == 0 and np.array_equal(positions(obj.data), X)

@@ -103,3 +103,23 @@ def test_invalid_exponents_and_bernstein_needs_integers():
     out = k.cdf(t)
     assert np.isnan(out[0]) and out[1] == 0 and out[2] == 1
     assert np.isnan(k.cdf(t, 3)[0])
+
+
+@pytest.mark.parametrize("il,ir", [(40, 40), (50, 50), (200, 3), (500, 500)])
+def test_large_integer_exponents_evaluate_like_betainc(il, ir):
+    """Binomials above 2**63 used to turn the Bernstein sum into an object array
+    (UFuncTypeError from (40, 40) on); up to MAX_EXPONENT the form stays accurate."""
+    t = np.linspace(0.0, 1.0, 401)
+    k = BFBS(il, ir)
+    assert np.abs(k(t) - betainc(il + 1.0, ir + 1.0, t)).max() <= 1e-12
+    assert all(np.all(np.isfinite(k(t, nu))) for nu in range(k.max_order + 1))
+
+
+@pytest.mark.parametrize("kw,name", [({"i_left": 501}, "i_left"), ({"i_right": 1e6}, "i_right"),
+                                     ({"i_left": 600, "i_right": 600}, "i_left")])
+def test_exponents_above_the_maximum_are_named(kw, name):
+    from gerbs_core.kernels.bfbs import MAX_EXPONENT
+
+    with pytest.raises(InvalidParameterError, match=f"{name}: .*\\[0, {MAX_EXPONENT}\\]") as exc:
+        BFBS(**kw)
+    assert exc.value.name == name

@@ -1,0 +1,45 @@
+"""The add-on's exceptions and the one-line messages shown in panels and reports.
+
+All derive from gerbs_core's :class:`~gerbs_core.errors.GERBSError`, so one
+``except GERBSError`` catches everything the project raises; the ones for bad
+input are also ``ValueError`` (like the core's), as before.
+"""
+from __future__ import annotations
+
+from gerbs_core.errors import GERBSError, GERBSValueError, InvalidMeshError, ResourceLimitError
+
+PREFIX = "GERBS: "
+
+
+class GERBSSyncError(GERBSValueError):
+    """The surface could not be built; the message names the problem and indices."""
+
+
+class NoModifierError(GERBSError, LookupError):
+    """The object has no GERBS Blending Surface modifier (or is not a mesh object)."""
+
+
+class OperationError(GERBSError, RuntimeError):
+    """Blender refused an operation (e.g. Apply outside Object Mode or on shared data)."""
+
+
+def format_error(exc: Exception) -> str:
+    """One line naming the problem and where it is (for panels, reports, the log)."""
+    if isinstance(exc, InvalidMeshError):
+        where = f"{exc.element} indices {list(exc.indices[:10])}" if exc.indices else "the mesh"
+        return f"{PREFIX}invalid mesh ({exc.problem}) at {where}: {exc}"
+    if isinstance(exc, ResourceLimitError):
+        return f"{PREFIX}too large: {exc}"
+    if isinstance(exc, GERBSError):
+        return f"{PREFIX}{exc}"
+    # not the user's fault: a defect of gerbs_core (logged with its traceback)
+    return f"{PREFIX}internal error in the surface build ({type(exc).__name__}: {exc}); " \
+           f"base mesh left as is"
+
+
+def operator_message(exc: Exception) -> str:
+    """The text of an error raised by ``bpy.ops`` (``"Error: ...\\n"``) without the
+    prefix Blender adds, so reporting it again does not read "Error: Error: ..."."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    text = "; ".join(line.removeprefix("Error:").strip() for line in lines)
+    return text or type(exc).__name__

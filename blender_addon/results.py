@@ -1,0 +1,105 @@
+"""The hidden result objects: creating them, and removing what no modifier uses.
+
+Each GERBS modifier points at one result object through its hidden "Result"
+input (that pointer is the object's only user, so it is saved with the file and
+freed with the modifier). The result object and its mesh carry
+``ids.RESULT_TAG``; the node group carries ``ids.GROUP_TAG``. Garbage
+collection removes tagged objects, meshes and groups with no users: a removed
+or applied modifier, a deleted base object, a result object deleted by hand
+(its mesh stays behind with no user).
+
+Collecting scans ``bpy.data``, so the handlers run it only when something
+that can leave garbage happened (see :class:`Watch`), never for an update of an
+unrelated object.
+"""
+from __future__ import annotations
+
+import logging
+
+import bpy
+
+from . import geometry_nodes as gn
+from . import ids
+
+log = logging.getLogger(__name__)
+
+_owners: dict[int, tuple] = {}  # result object's session_uid -> owning state key
+
+
+def clear() -> None:
+    _owners.clear()
+
+
+def new_result_object(obj):
+    mesh = bpy.data.meshes.new(f"{ids.RESULT_NAME} {obj.name}")
+    mesh[ids.RESULT_TAG] = True
+    res = bpy.data.objects.new(mesh.name, mesh)
+    res[ids.RESULT_TAG] = True
+    return res
+
+
+def ensure_result(obj, mod, key: tuple, alive) -> tuple[object, bool]:
+    """The modifier's hidden result object and whether it is new.
+
+    A new one is made if there is none, or if the result belongs to another
+    live modifier (``alive(owner_key)``; e.g. the object was duplicated with its
+    modifier, and both now point at one result).
+    """
+    res = gn.get_result(mod)
+    if res is not None:
+        owner = _owners.get(res.session_uid)
+        if res.type != "MESH" or (owner is not None and owner != key and alive(owner)):
+            res = None
+    new = res is None
+    if new:
+        res = new_result_object(obj)
+        gn.set_result(mod, res)
+        # an ID property write does not tag depsgraph relations; re-assigning the
+        # group through RNA does, so the new object is evaluated in this update
+        mod.node_group = mod.node_group
+    _owners[res.session_uid] = key
+    return res, new
+
+
+def collect_garbage() -> int:
+    """Delete tagged result objects, meshes and node groups that nothing uses."""
+    removed = 0
+    for res in [o for o in bpy.data.objects if o.get(ids.RESULT_TAG) and o.users == 0]:
+        _owners.pop(res.session_uid, None)
+        mesh = res.data
+        bpy.data.objects.remove(res)
+        removed += 1
+        if mesh is not None and mesh.users == 0:
+            bpy.data.meshes.remove(mesh)
+    for mesh in [m for m in bpy.data.meshes if m.get(ids.RESULT_TAG) and m.users == 0]:
+        bpy.data.meshes.remove(mesh)  # its object was deleted by hand
+        removed += 1
+    for group in [g for g in bpy.data.node_groups if gn.is_gerbs_group(g) and g.users == 0]:
+        bpy.data.node_groups.remove(group)
+        removed += 1
+    if removed:
+        log.debug("removed %d unused GERBS data-blocks", removed)
+    return removed
+
+
+class Watch:
+    """Tells the handlers when data-blocks may have been deleted: the number of
+    objects, meshes or node groups changed since the last look (counting a
+    ``bpy.data`` collection is a C list walk, microseconds for thousands)."""
+
+    def __init__(self):
+        self._counts = None
+
+    @staticmethod
+    def _now():
+        return len(bpy.data.objects), len(bpy.data.meshes), len(bpy.data.node_groups)
+
+    def changed(self) -> bool:
+        """Did the counts change since the last :meth:`changed` or :meth:`seen`?"""
+        counts = self._now()
+        changed, self._counts = counts != self._counts, counts
+        return changed
+
+    def seen(self) -> None:
+        """Take the current counts as known (after the add-on's own additions)."""
+        self._counts = self._now()
