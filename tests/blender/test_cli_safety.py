@@ -181,7 +181,7 @@ def test_suzanne_re_exported_by_blender_is_accepted(blender, tmp_path, ext):
 
 def _suzanne_surface_count(r):
     from gerbs_core.mesh_topology import MeshTopology
-    from gerbs_core.primitives import suzanne
+    from gerbs_core.datasets.primitives import suzanne
     from gerbs_core.tessellation import output_counts
 
     X, F = suzanne()
