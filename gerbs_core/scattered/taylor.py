@@ -73,22 +73,26 @@ def taylor_jet(D, d, nu):
 
     ``D[k]`` has shape (..., V, n^k) broadcast-compatible with d (..., n).
     Returns value (..., V), gradient (..., V, n), Hessian (..., V, n, n).
+    Each contraction with d is one matmul over the last axis, so the temporaries
+    are never larger than D[k] itself.
     """
     m = len(D) - 1
-    dd = d[..., None, :]                 # broadcast over V
+    n = d.shape[-1]
     v = D[0].copy()
-    g = np.zeros(D[0].shape + (d.shape[-1],)) if nu >= 1 else None
-    h = np.zeros(D[0].shape + (d.shape[-1],) * 2) if nu >= 2 else None
+    g = np.zeros(v.shape + (n,)) if nu >= 1 else None
+    h = np.zeros(v.shape + (n, n)) if nu >= 2 else None
+    lead = np.broadcast_shapes(v.shape[:-1], d.shape[:-1])
     if g is not None:
-        g = np.broadcast_to(g, np.broadcast_shapes(g.shape, dd.shape)).copy()
+        g = np.broadcast_to(g, lead + g.shape[-2:]).copy()
     if h is not None:
-        h = np.broadcast_to(h, np.broadcast_shapes(h.shape, dd.shape + (d.shape[-1],))).copy()
+        h = np.broadcast_to(h, lead + h.shape[-3:]).copy()
     for k in range(1, m + 1):
         A = D[k]
-        # contract trailing axes with d one at a time, keeping partial contractions
         partial = [A]
         for _ in range(k):
-            A = np.sum(A * dd.reshape(dd.shape[:-1] + (1,) * (A.ndim - dd.ndim) + (dd.shape[-1],)), axis=-1)
+            # d as a column (..., 1, ..., 1, n, 1) against A's trailing axis
+            col = d.reshape(d.shape[:-1] + (1,) * (A.ndim - d.ndim) + (n, 1))
+            A = np.matmul(A[..., None, :], col)[..., 0, 0]
             partial.append(A)
         # partial[j]: D_k with j axes contracted -> (k - j) free axes
         v = v + partial[k] / math.factorial(k)
@@ -115,12 +119,15 @@ def _monomials(pw, alphas, fact):
     return np.moveaxis(out, 0, -1)
 
 
-def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=None, chunk=20000):
+def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=None, chunk=None,
+                         work_bytes=128e6):
     """Estimate partial derivatives of orders known+1 .. fit_degree at every point.
 
     ``D_known`` = [values (N, V), gradients (N, V, n)?, Hessians (N, V, n, n)?] as given
     (known = len(D_known) - 1). Neighbour values, and neighbour gradients when given,
     are fitted after subtracting the known Taylor terms at x_i.
+    ``tree``: a cKDTree of ``points`` to reuse; the points are processed in chunks whose
+    working arrays take about ``work_bytes`` (or ``chunk`` points at a time).
     Returns a dict k -> tensor (N, V, n^k) for k = known+1 .. fit_degree.
     """
     N, n = points.shape
@@ -139,6 +146,10 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
     K = min(K, N - 1)
     tree = cKDTree(points) if tree is None else tree
     V = D_known[0].shape[1]
+    if chunk is None:
+        rows = K * (1 + (n if known >= 1 else 0))
+        per_point = 8 * (rows * (3 * M + 2 * V + 3 * n + 4) + M * (M + V) * 3)
+        chunk = int(max(64, min(N, work_bytes // per_point)))
     expo = np.array(alphas, dtype=float)                       # (M, n)
     fact = np.array([np.prod([math.factorial(a) for a in al]) for al in alphas])
     order = expo.sum(1)

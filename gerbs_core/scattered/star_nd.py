@@ -1,0 +1,241 @@
+"""Star-1 neighbourhoods of a Delaunay simplicialization in R^n (paper Example 2 case 1,
+Example 8) with a smooth star gauge on the sphere S^(n-1) (DESIGN 4 in n dimensions).
+
+The star of a vertex v is the union of the simplices S containing it. In S the
+exact gauge of v (eq. (62) with the exact radial function) is linear,
+
+    l_S(y) = 1 - lambda_v^S(v + y) = a_S . y,     y = x - v,
+
+so the exact gauge is piecewise linear, kinked across the facets through v. The
+smooth gauge blends the same linear pieces, pulled in by c = (1 + kappa)/2, with a
+smooth partition of unity W_S on the sphere (positively homogeneous of degree 0):
+
+    g~(y) = (1/shrink) sum_S W_S(y) l_S(y) / c,      W_S = w_S / sum_T w_T,
+    w_S(y) = prod_{j != v} F((mu_j + delta_S) / delta_S),  mu_j = lambda_j^S(v+y) / l_S(y),
+
+mu the barycentric coordinates, in the facet F_S opposite v, of the point where the ray
+from v through x meets F_S's hyperplane; F the kernel CDF (C-infinity for ERBS). w_S = 1
+on the closed cone over F_S and > 0 only in its delta_S-enlargement, so sum w >= 1 on
+the star and W is smooth; psi = b(g~) (the chain rule of :mod:`.metrics`).
+
+Certified bounds (no sampling). On the enlarged facet, in F_S's hyperplane, the
+exact gauge g is within L D of 1 (L = max |a_T| over the star, the Lipschitz constant
+of g; D = delta_S n max_j |q_j - q_bar| bounds the distance to F_S), and delta_S is
+chosen with L D = (1 - kappa)/(1 + kappa), so every blended piece satisfies
+g <= l_S/c <= g/kappa where W_S > 0, and by convexity of the blend
+
+    g / shrink <= g~ <= g / (kappa shrink)        on the star.
+
+Hence supp psi_v lies inside the star (at g <= shrink), and the cover is thick: in a
+simplex max_v lambda_v >= 1/(n+1), so some g_v <= n/(n+1) and psi_v >= b(n/((n+1) kappa
+shrink)) > 0 when kappa shrink > n/(n+1) (the default kappa is chosen so).
+``exact=True`` uses g = l_S / shrink (kinked; tests only).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import Delaunay, QhullError
+
+from ..errors import InvalidParameterError, InvalidPointSetError
+from .metrics import bump_from_t, chain_jet
+from .partition import jmul, jsum, normalize
+
+__all__ = ["DelaunayStarCover", "default_kappa"]
+
+
+def default_kappa(n, shrink=0.95):
+    """kappa with kappa * shrink halfway between n/(n+1) (the thickness limit) and 1."""
+    t = n / (n + 1.0)
+    return min(0.995, 0.5 * (1.0 + t) / shrink)
+
+
+def _delaunay(points):
+    N, n = points.shape
+    if N < n + 1:
+        raise InvalidPointSetError(f"points: a Delaunay cover in R^{n} needs >= {n + 1} points, got {N}")
+    try:
+        tri = Delaunay(points)
+    except QhullError as exc:
+        raise InvalidPointSetError(
+            "points: degenerate point set (in a hyperplane), no Delaunay simplicialization: "
+            + str(exc).splitlines()[0], np.arange(N)) from None
+    if len(tri.coplanar):
+        raise InvalidPointSetError("points: Qhull dropped these points (numerically coincident)",
+                                   tri.coplanar[:, 0])
+    return tri
+
+
+def _jet_ratio(A, B, GA, GB):
+    """Jet (value, gradient, Hessian) of mu = A/B for linear A, B with gradients GA, GB."""
+    mu = A / B
+    g = (GA - mu[..., None] * GB) / B[..., None]
+    h = -(g[..., :, None] * GB[..., None, :] + GB[..., :, None] * g[..., None, :]) / B[..., None, None]
+    return mu, g, h
+
+
+class DelaunayStarCover:
+    """Smooth star gauges of the Delaunay stars of points (N, n), n >= 2 (see module doc).
+
+    Attributes: ``tri`` (scipy Delaunay), ``simplices`` (T, n+1), ``G`` (T, n+1, n) the
+    barycentric gradients, ``delta`` and ``scale`` c per corner (T*(n+1),),
+    ``min_radius`` (N,) a lower bound of rho~ per star, ``kappa``, ``shrink``.
+    """
+
+    def __init__(self, points, kernel, kappa=None, shrink=0.95, exact=False, tri=None):
+        N, n = points.shape
+        self.points, self.kernel, self.n, self.exact = points, kernel, n, bool(exact)
+        if not (0 < shrink <= 1):
+            raise InvalidParameterError("shrink", f"need 0 < shrink <= 1, got {shrink}")
+        kappa = default_kappa(n, shrink) if kappa is None else float(kappa)
+        if not (0 < kappa < 1):
+            raise InvalidParameterError("kappa", f"need 0 < kappa < 1, got {kappa}")
+        if kappa * shrink <= n / (n + 1.0):
+            raise InvalidParameterError(
+                "kappa", f"kappa * shrink = {kappa * shrink:.4g} must exceed n/(n+1) = "
+                f"{n / (n + 1.0):.4g} for a thick cover in R^{n}")
+        self.kappa, self.shrink = kappa, float(shrink)
+        self.tri = _delaunay(points) if tri is None else tri
+        S = self.simplices = self.tri.simplices
+        Tinv = self.tri.transform[:, :n, :]
+        if not np.all(np.isfinite(Tinv)):
+            bad = np.unique(S[~np.isfinite(Tinv).all(axis=(1, 2))])
+            raise InvalidPointSetError("points: degenerate Delaunay simplices at points", bad)
+        self.G = np.concatenate([Tinv, -Tinv.sum(axis=1, keepdims=True)], axis=1)
+        self._corners()
+
+    def _corners(self):
+        """Per-star corner lists (CSR) and the certified delta, c of every corner."""
+        S, G, n = self.simplices, self.G, self.n
+        T = len(S)
+        flat = S.reshape(-1)                                  # corner c = t (n+1) + k
+        order = np.argsort(flat, kind="stable")
+        self.star_ptr = np.concatenate([[0], np.cumsum(np.bincount(flat, minlength=len(self.points)))])
+        self.star_corners = order
+        inv_p = np.linalg.norm(G, axis=-1).reshape(-1)        # |a_S| = 1 / p_S
+        L = np.zeros(len(self.points))
+        np.maximum.at(L, flat, inv_p)
+        # facet spread max_j |q_j - q_bar| of the facet opposite each corner
+        V = self.points[S]                                    # (T, n+1, n)
+        tot = V.sum(axis=1, keepdims=True)
+        qbar = (tot - V) / n                                   # facet centroid opposite k
+        d = np.linalg.norm(V[:, None, :, :] - qbar[:, :, None, :], axis=-1)   # (T, k, j)
+        d[:, np.arange(n + 1), np.arange(n + 1)] = 0.0
+        spread = d.max(axis=2).reshape(-1)
+        beta = (1.0 - self.kappa) / (1.0 + self.kappa)
+        self.delta = beta / (L[flat] * n * spread)
+        self.scale = np.full(T * (n + 1), 1.0 if self.exact else 0.5 * (1.0 + self.kappa))
+        self.min_radius = np.full(len(self.points), np.inf)
+        np.minimum.at(self.min_radius, flat, self.kappa * self.shrink / inv_p)
+        self.lipschitz = L
+
+    # ------------------------------------------------------------------ lookup
+    def candidates(self, x):
+        """Vertices (M, n+1) of the simplex containing each x (-1 outside the hull)."""
+        t = self.tri.find_simplex(x, tol=1e-12)
+        ok = t >= 0
+        return np.where(ok[:, None], self.simplices[np.maximum(t, 0)], -1)
+
+    def _pairs(self, verts):
+        """Ragged (query slot, star corner) pairs for the slots ``verts`` (Q,) (>= 0)."""
+        deg = self.star_ptr[verts + 1] - self.star_ptr[verts]
+        slot = np.repeat(np.arange(len(verts)), deg)
+        start = np.repeat(self.star_ptr[verts], deg)
+        off = np.arange(len(slot)) - np.repeat(np.cumsum(deg) - deg, deg)
+        return slot, self.star_corners[start + off]
+
+    # --------------------------------------------------------------- the gauge
+    def gauge_jet(self, y, verts, nu):
+        """g~ of the stars ``verts`` (Q,) at offsets y (Q, n): value (Q,), gradient (Q, n),
+        Hessian (Q, n, n) (None beyond ``nu``). Exact to rounding."""
+        n, Q = self.n, len(verts)
+        slot, corner = self._pairs(verts)
+        t, k = np.divmod(corner, n + 1)
+        Gs = self.G[t]                                        # (P, n+1, n)
+        lam = np.einsum("pjn,pn->pj", Gs, y[slot])            # lambda_j(v + y) - delta_jk
+        rows = np.arange(len(slot))
+        ell = -lam[rows, k]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            mu = lam / ell[:, None]
+        mu[rows, k] = np.inf
+        live = (ell > 0) & np.all(mu >= -self.delta[corner][:, None], axis=1)
+        if self.exact:
+            live &= np.all(mu >= 0, axis=1)
+        # first live corner per slot (the exact gauge), and the padded live lists
+        slot, corner, t, k, Gs = slot[live], corner[live], t[live], k[live], Gs[live]
+        counts = np.bincount(slot, minlength=Q)
+        K = max(int(counts.max()) if Q else 1, 1)
+        rank = np.arange(len(slot)) - np.repeat(np.cumsum(counts) - counts, counts)
+        a = -Gs[np.arange(len(slot)), k]                      # grad l_S
+        ys = y[slot]
+        ell = np.einsum("pn,pn->p", a, ys)
+        w = self._weights(Gs, k, a, ys, ell, corner, nu)
+        c = self.scale[corner]
+        u = (ell / c, a / c[:, None], np.zeros(a.shape + (n,)) if nu >= 2 else None)
+        pad = [np.zeros((Q, K) + (n,) * i) for i in range(nu + 1)]
+        Wp = [p.copy() for p in pad]
+        Up = [p.copy() for p in pad]
+        for i in range(nu + 1):
+            Wp[i][slot, rank] = w[i]
+            Up[i][slot, rank] = u[i]
+        Wp += [None] * (2 - nu)
+        Up += [None] * (2 - nu)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            Wn = normalize(tuple(Wp), nu)
+        Wn = tuple(None if a_ is None else np.nan_to_num(a_, nan=0.0) for a_ in Wn)
+        g = list(jsum(jmul(Wn, tuple(Up), nu), nu))
+        g[0] = np.where(counts > 0, g[0], np.inf)             # no live piece: outside the star
+        return tuple(None if a_ is None else a_ / self.shrink for a_ in g)
+
+    def _weights(self, Gs, k, a, ys, ell, corner, nu):
+        """Jets of w_S = prod_j F((mu_j + delta)/delta) on the live pairs."""
+        n = self.n
+        P = len(k)
+        one = (np.ones(P), np.zeros((P, n)) if nu >= 1 else None,
+               np.zeros((P, n, n)) if nu >= 2 else None)
+        if self.exact:
+            return one
+        w = one
+        dl = self.delta[corner]
+        rows = np.arange(P)
+        for jj in range(n):
+            j = np.where(jj < k, jj, jj + 1)                  # the facet vertices j != k
+            Gj = Gs[rows, j]
+            mu, mg, mh = _jet_ratio(np.einsum("pn,pn->p", Gj, ys), ell, Gj, a)
+            s = (mu + dl) / dl
+            inner = s < 1.0
+            if not inner.any():
+                continue
+            F = self.kernel.cdf_derivs(np.clip(s, 0.0, 1.0), nu)
+            f = [F[0]]
+            if nu >= 1:
+                f.append((F[1] / dl)[:, None] * mg)
+            if nu >= 2:
+                f.append((F[2] / dl ** 2)[:, None, None] * mg[:, :, None] * mg[:, None, :]
+                         + (F[1] / dl)[:, None, None] * mh)
+            f += [None] * (2 - nu)
+            w = jmul(w, tuple(f), nu)
+        return w
+
+    def psi_jet(self, x, idx, nu):
+        """psi (M, K), gradient (M, K, n), Hessian (M, K, n, n) of the stars idx (M, K)."""
+        M, K = idx.shape
+        n = self.n
+        out = [np.zeros((M, K) + (n,) * i) for i in range(nu + 1)] + [None] * (2 - nu)
+        valid = idx >= 0
+        if not valid.any():
+            return tuple(out)
+        rows, cols = np.nonzero(valid)
+        v = idx[rows, cols]
+        y = x[rows] - self.points[v]
+        at_centre = ~np.any(y != 0.0, axis=1)
+        y = np.where(at_centre[:, None], 1.0, y)              # any direction: masked below
+        g = list(self.gauge_jet(y, v, nu))
+        g[0] = np.where(at_centre, 0.0, g[0])
+        bt = bump_from_t(g[0], self.kernel, nu)
+        jet = chain_jet(bt, g[1], g[2], nu)
+        for i in range(nu + 1):
+            val = jet[i]
+            if i:
+                val = np.where(at_centre.reshape((-1,) + (1,) * i), 0.0, val)
+            out[i][rows, cols] = val
+        return tuple(out)
