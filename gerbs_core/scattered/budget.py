@@ -16,13 +16,14 @@ from ..errors import ResourceLimitError
 __all__ = ["row_bytes", "call_estimate", "check_budget", "spatial_order"]
 
 
-def row_bytes(K, n, V, nu, degree, pairs=0):
+def row_bytes(K, n, V, nu, coefs, pairs=0):
     """Bytes of working arrays per query row with K candidates (upper bound).
 
+    ``coefs``: Taylor coefficients per point and value gathered per candidate;
     ``pairs``: (star, corner) pairs per row of the n-D star gauge (0 otherwise).
     """
     jet = 1 + (n if nu >= 1 else 0) + (n * n if nu >= 2 else 0)
-    taylor = V * sum(n ** k for k in range(degree + 1))
+    taylor = V * coefs
     per_cand = 8 * (4 * n + 10 * jet + 3 * taylor + 3 * V * jet) + 32
     per_pair = 8 * ((n + 1) * n + 3 * (n + 1) + 8)
     return int(K * per_cand + pairs * per_pair + 8 * V * jet * 2 + 64)

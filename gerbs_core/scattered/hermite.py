@@ -18,7 +18,7 @@ from .metrics import Euclidean, as_metric
 from .partition import disjoint_basis, general_basis, minimal_basis
 from .radii import check_points, nearest_distances
 from .star_nd import DelaunayStarCover
-from .taylor import averaged_taylor, estimate_derivatives, taylor_jet
+from .taylor import averaged_taylor, coefficient_tables, estimate_derivatives, monomials
 
 __all__ = ["GERBSInterpolator"]
 
@@ -131,6 +131,8 @@ class GERBSInterpolator:
                 D = D + [est[k] for k in range(known + 1, self.degree + 1)]
             D = D[: self.degree + 1]
         self.D = D
+        # T_i and its derivatives as monomial coefficients (gathered per query)
+        self._coef = coefficient_tables(D, n, 2)
 
     # ------------------------------------------------------------------
     def _setup_cover(self, cover, basis, metric, rho, R, domain, gauge_kw):
@@ -366,7 +368,7 @@ class GERBSInterpolator:
         if isinstance(self.cover, DelaunayStarCover):
             deg = np.diff(self.cover.star_ptr)
             pairs = int(deg[np.maximum(idx, 0)].sum(axis=1).max()) if idx.size else 0
-        rb = _budget.row_bytes(idx.shape[1], self.n, self._V, nu, self.degree, pairs)
+        rb = _budget.row_bytes(idx.shape[1], self.n, self._V, nu, sum(c[0, 0].size for c in self._coef[: nu + 1]), pairs)
         step = int(max(1, self._work // rb))
         if step >= len(x):
             return self._eval_chunk(x, idx, edge, nu)
@@ -379,16 +381,20 @@ class GERBSInterpolator:
     def _eval_chunk(self, x, idx, edge, nu):
         idx, Bv, Bg, Bh = self._basis(x, idx, edge, nu)
         j = np.maximum(idx, 0)
-        d = x[:, None, :] - self.points[j]
-        Tv, Tg, Th = taylor_jet([Dk[j] for Dk in self.D], d, nu)      # (M, K, V, ...)
+        mono = monomials(x[:, None, :] - self.points[j], self.degree)     # (M, K, Q)
+        C = self._coef
         bad = ~np.all(np.isfinite(Bv), axis=1)
         Bv = np.where(np.isfinite(Bv), Bv, 0.0)
         if nu == 0:
-            out = np.einsum("mk,mkv->mv", Bv, Tv)
-        elif nu == 1:
-            out = np.einsum("mki,mkv->mvi", Bg, Tv) + np.einsum("mk,mkvi->mvi", Bv, Tg)
+            out = np.einsum("mk,mkvq,mkq->mv", Bv, C[0][j], mono)
         else:
-            out = (np.einsum("mkij,mkv->mvij", Bh, Tv) + np.einsum("mki,mkvj->mvij", Bg, Tg)
-                   + np.einsum("mkj,mkvi->mvij", Bg, Tg) + np.einsum("mk,mkvij->mvij", Bv, Th))
+            Tv = np.einsum("mkvq,mkq->mkv", C[0][j], mono)
+            Tg = np.einsum("mkvlq,mkq->mkvl", C[1][j], mono[..., : C[1].shape[-1]])
+            if nu == 1:
+                out = np.einsum("mki,mkv->mvi", Bg, Tv) + np.einsum("mk,mkvi->mvi", Bv, Tg)
+            else:
+                Th = np.einsum("mkvlrq,mkq->mkvlr", C[2][j], mono[..., : C[2].shape[-1]])
+                out = (np.einsum("mkij,mkv->mvij", Bh, Tv) + np.einsum("mki,mkvj->mvij", Bg, Tg)
+                       + np.einsum("mkj,mkvi->mvij", Bg, Tg) + np.einsum("mk,mkvij->mvij", Bv, Th))
         out[bad] = self.fill_value
         return out
