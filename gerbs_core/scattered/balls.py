@@ -64,6 +64,17 @@ class BallCover:
             self.disjoint_phi = bool(np.all(self.rho <= 0.5 * self.nearest))
         validate_radii(self.rho, self.R, self.nearest)
         self._build_search()
+        # balls per query on a sample (the data points, where overlaps peak): for
+        # sizing query blocks before their candidates are known
+        sample = points[:: max(1, N // 2000)]
+        self.k_estimate = int((self.candidates(sample) >= 0).sum(axis=1).max())
+
+    def search_bytes_per_query(self):
+        """Working bytes of :meth:`candidates` per query row (upper bound: the k-NN
+        doubling ends at k < 2 K + 16; the exact filter holds (K, n) offsets)."""
+        n = self.points.shape[1]
+        k = 2 * (2 * self.k_estimate + 16)
+        return 8 * (4 * k + 3 * k * (n + 1)) + 64
 
     def _build_search(self):
         m = self.metric

@@ -97,6 +97,7 @@ class GERBSInterpolator:
                  R=None, regularized=None, domain=None, fill_value=np.nan, exact_gauge=False,
                  kappa=None, shrink=0.95, chunk_size=20000, memory_budget=1e9):
         pts, tree = check_points(points, "points", min_points=1, return_tree=True)
+        tree = cKDTree(pts) if tree is None else tree     # the one tree of the points
         N, n = pts.shape
         self.points, self.n, self._tree = pts, n, tree
         self.kernel = _default_kernel() if kernel is None else kernel
@@ -175,8 +176,7 @@ class GERBSInterpolator:
         else:
             self.cover = DelaunayStarCover(self.points, self.kernel, **gauge_kw)
             self.tri, self.simplices = self.cover.tri, self.cover.simplices
-        # phi radii for the general basis: inside the support, halved (Remark 6)
-        self._rho = 0.5 * np.minimum(self.cover.min_radius, self._nearest_d())
+        self._rho = None
 
     @property
     def R(self):
@@ -185,8 +185,13 @@ class GERBSInterpolator:
 
     @property
     def rho(self):
-        """Non-degeneracy radii rho_i (N,): the phi balls of the general basis."""
-        return self.cover.rho if self.cover_kind == "balls" else self._rho
+        """Non-degeneracy radii rho_i (N,): the phi balls of the general basis (for star
+        covers inside the support, halved: Remark 6; computed on first use)."""
+        if self.cover_kind == "balls":
+            return self.cover.rho
+        if self._rho is None:
+            self._rho = 0.5 * np.minimum(self.cover.min_radius, self._nearest_d())
+        return self._rho
 
     @property
     def cover_guaranteed(self):
@@ -248,7 +253,7 @@ class GERBSInterpolator:
         the domain boundary) by a direct distance check, so the query stays local."""
         R = self.cover.support_radius
         if self._centre_tree is None:
-            self._centre_tree = cKDTree(self.points)
+            self._centre_tree = self._tree            # the fit's tree of the points
             self._r_typ = float(np.quantile(R, 0.99))
             self._big = np.flatnonzero(R > self._r_typ)
         idx = _covers.padded_ball_query(self._centre_tree, x, self._r_typ * (1 + 1e-12))
@@ -346,11 +351,12 @@ class GERBSInterpolator:
         n, V = self.n, self._V
         _budget.check_budget(M, n, V, nu, self._work, self.memory_budget)
         out = np.empty((M, V) + (n,) * nu)
-        order = None
-        if M > self.chunk_size and n > 1:
-            order = _budget.spatial_order(xf, max(int((M / 4) ** (1.0 / n)), 1))
-        for s in range(0, M, self.chunk_size):
-            e = min(M, s + self.chunk_size)
+        order = self._spatial_order(xf)
+        block = self.chunk_size
+        if self.cover_kind == "balls":       # the candidate search itself within the work
+            block = int(max(1, min(block, self._work // self.cover.search_bytes_per_query())))
+        for s in range(0, M, block):
+            e = min(M, s + block)
             sel = order[s:e] if order is not None else slice(s, e)
             out[sel] = self._eval_block(xf[sel], nu)
         return out.reshape(lead + self.vshape + (n,) * nu)
