@@ -174,7 +174,7 @@ class GERBSInterpolator:
                 self.cover = _covers.polygon_cover(self.points, list(cover), self.kernel, **gauge_kw)
             self._centre_tree = None
         else:
-            self.cover = DelaunayStarCover(self.points, self.kernel, **gauge_kw)
+            self.cover = DelaunayStarCover(self.points, self.kernel, tree=self._tree, **gauge_kw)
             self.tri, self.simplices = self.cover.tri, self.cover.simplices
         self._rho = None
 

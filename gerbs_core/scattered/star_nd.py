@@ -70,6 +70,25 @@ def _delaunay(points):
     return tri
 
 
+def _barycentric_gradients(points, S):
+    """G (T, n+1, n): grad lambda_j of every simplex (lambda = G (x - v_n) + e_n)."""
+    n = points.shape[1]
+    E = points[S[:, :n]] - points[S[:, n:]]                   # rows v_j - v_n, (T, n, n)
+    try:
+        with np.errstate(all="ignore"):
+            Tinv = np.linalg.inv(E).transpose(0, 2, 1)       # lambda_j = Tinv_j . (x - v_n)
+        # flat simplices: |grad lambda| * edge length ~ 1 / (relative height) explodes
+        size = np.abs(E).max(axis=(1, 2))
+        bad = ~(np.abs(Tinv).max(axis=(1, 2)) * size < 1e12)
+    except np.linalg.LinAlgError:
+        bad = np.ones(len(S), bool)
+        bad[:] = [np.linalg.matrix_rank(e) < n for e in E]
+    if bad.any():
+        raise InvalidPointSetError("points: degenerate (flat) Delaunay simplices at points",
+                                   np.unique(S[bad]))
+    return np.concatenate([Tinv, -Tinv.sum(axis=1, keepdims=True)], axis=1)
+
+
 def _jet_ratio(A, B, GA, GB):
     """Jet (value, gradient, Hessian) of mu = A/B for linear A, B with gradients GA, GB."""
     mu = A / B
@@ -82,12 +101,16 @@ class DelaunayStarCover:
     """Smooth star gauges of the Delaunay stars of points (N, n), n >= 2 (see module doc).
 
     Attributes: ``tri`` (scipy Delaunay), ``simplices`` (T, n+1), ``G`` (T, n+1, n) the
-    barycentric gradients, ``delta`` and ``scale`` c per corner (T*(n+1),),
-    ``min_radius`` (N,) a lower bound of rho~ per star, ``kappa``, ``shrink``.
+    barycentric gradients, ``delta`` and ``scale`` c per corner (T*(n+1),) (corner
+    t (n+1) + k: vertex k of simplex t), ``star_ptr``/``star_corners`` the corners of
+    each star (CSR), ``lipschitz`` (N,) the exact gauge's Lipschitz constant per star
+    (1 / the smallest facet distance), ``min_radius`` (N,) a lower bound of rho~ per
+    star, ``kappa``, ``shrink``.
     """
 
-    def __init__(self, points, kernel, kappa=None, shrink=0.95, exact=False, tri=None):
+    def __init__(self, points, kernel, kappa=None, shrink=0.95, exact=False, tri=None, tree=None):
         N, n = points.shape
+        self._tree = tree
         self.points, self.kernel, self.n, self.exact = points, kernel, n, bool(exact)
         if not (0 < shrink <= 1):
             raise InvalidParameterError("shrink", f"need 0 < shrink <= 1, got {shrink}")
@@ -101,11 +124,7 @@ class DelaunayStarCover:
         self.kappa, self.shrink = kappa, float(shrink)
         self.tri = _delaunay(points) if tri is None else tri
         S = self.simplices = self.tri.simplices
-        Tinv = self.tri.transform[:, :n, :]
-        if not np.all(np.isfinite(Tinv)):
-            bad = np.unique(S[~np.isfinite(Tinv).all(axis=(1, 2))])
-            raise InvalidPointSetError("points: degenerate Delaunay simplices at points", bad)
-        self.G = np.concatenate([Tinv, -Tinv.sum(axis=1, keepdims=True)], axis=1)
+        self.G = _barycentric_gradients(points, S)
         self._corners()
 
     def _corners(self):
@@ -158,9 +177,41 @@ class DelaunayStarCover:
     # ------------------------------------------------------------------ lookup
     def candidates(self, x):
         """Vertices (M, n+1) of the simplex containing each x (-1 outside the hull)."""
-        t = self.tri.find_simplex(x, tol=1e-12)
+        t = self.locate(x)
         ok = t >= 0
         return np.where(ok[:, None], self.simplices[np.maximum(t, 0)], -1)
+
+    def locate(self, x, tol=1e-12, max_steps=None):
+        """Simplex (M,) containing each x, -1 outside the hull: a visibility walk (to the
+        neighbour opposite the most negative barycentric coordinate, which terminates on
+        Delaunay simplicializations) from a simplex of the nearest point, all queries at
+        once; Qhull's find_simplex for any walk longer than ``max_steps``."""
+        n, S = self.n, self.simplices
+        if self._tree is None:
+            from scipy.spatial import cKDTree
+            self._tree = cKDTree(self.points)
+        v = self._tree.query(x)[1]
+        t = self.star_corners[self.star_ptr[v]] // (n + 1)
+        out = np.full(len(x), -1)
+        live = np.arange(len(x))
+        nbr = self.tri.neighbors
+        steps = max_steps or 20 + 4 * int(round(len(self.points) ** (1.0 / n)))
+        for _ in range(steps):
+            if not live.size:
+                break
+            tl = t[live]
+            lam = np.einsum("mjn,mn->mj", self.G[tl], x[live] - self.points[S[tl, n]])
+            lam[:, n] += 1.0
+            j = np.argmin(lam, axis=1)
+            inside = lam[np.arange(len(live)), j] >= -tol
+            out[live[inside]] = tl[inside]
+            nxt = nbr[tl, j]
+            move = ~inside & (nxt >= 0)
+            t[live[move]] = nxt[move]
+            live = live[move]
+        if live.size:
+            out[live] = self.tri.find_simplex(x[live], tol=tol)
+        return out
 
     def _pairs(self, verts):
         """Ragged (query slot, star corner) pairs for the slots ``verts`` (Q,) (>= 0)."""

@@ -110,26 +110,14 @@ def _default_neighbors(M):
 
 def _monomials(pw, alphas, fact):
     """u^alpha / alpha! as a contiguous (c, M, K) array (one row per alpha), from the
-    powers pw[k] = u^k of shape (n, c, K). Products of the leading coordinates are
-    shared between the multi-indices that have them in common."""
+    powers pw[k] = u^k of shape (n, c, K)."""
     out = np.empty(pw[0].shape[1:2] + (len(alphas),) + pw[0].shape[2:])
-    cache = {}
-
-    def prefix(a, upto):
-        """prod_{k < upto} u_k^a_k (None for the empty product)."""
-        key = (a[:upto], upto)
-        if key not in cache:
-            if upto == 0:
-                cache[key] = None
-            else:
-                head = prefix(a, upto - 1)
-                e = a[upto - 1]
-                cache[key] = head if e == 0 else (pw[e][upto - 1] if head is None else head * pw[e][upto - 1])
-        return cache[key]
-
     for j, a in enumerate(alphas):
-        m = prefix(a, len(a))
-        out[:, j, :] = (1.0 / fact[j]) if m is None else m * (1.0 / fact[j])
+        m = pw[a[0]][0] * (1.0 / fact[j])
+        for k in range(1, len(a)):
+            if a[k]:
+                m = m * pw[a[k]][k]
+        out[:, j, :] = m
     return out
 
 

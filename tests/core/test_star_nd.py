@@ -66,7 +66,6 @@ def test_certified_gauge_bounds_support_and_thickness():
     t = cov.tri.find_simplex(x)
     for k in range(n + 1):
         v = cov.simplices[t, k]
-        lam = np.einsum("mn,mn->m", cov.G[t, k], x - cov.tri.transform[t, n]) if k < n else None
         bary = np.einsum("mjn,mn->mj", cov.tri.transform[t, :n], x - cov.tri.transform[t, n])
         bary = np.concatenate([bary, 1 - bary.sum(1, keepdims=True)], axis=1)
         g = 1.0 - bary[:, k]
@@ -76,7 +75,6 @@ def test_certified_gauge_bounds_support_and_thickness():
         psi = cov.psi_jet(x, v[:, None], 2)
         far = g >= cov.shrink
         assert far.any() and np.all(psi[0][far] == 0) and np.all(psi[1][far] == 0)
-        del lam
     rep = cover_report(interp)
     assert rep["outside"] == 0
     assert rep["eps0"] >= ERBS().bump(n / ((n + 1) * cov.kappa * cov.shrink)) * (1 - 1e-9) > 0
@@ -105,8 +103,6 @@ def test_smooth_across_star_facets_and_kinked_control_is_caught(seed):
     resolvable in double precision.)"""
     n = 3
     rng = np.random.default_rng(seed)
-    P = rng.random((50, n))
-    f = smooth(P)[0]
     results = {}
     g = np.arange(5) / 4.0                              # a jittered lattice: few slivers
     P = np.stack(np.meshgrid(g, g, g), -1).reshape(-1, n) + rng.uniform(-0.06, 0.06, (125, n))
