@@ -45,12 +45,12 @@ def test_refused_before_allocating_with_the_estimate():
 @pytest.mark.parametrize("n,cover", [(2, "delaunay"), (2, "balls"), (3, "delaunay"), (3, "balls"),
                                      (4, "delaunay")])
 def test_estimate_bounds_the_measured_peak(n, cover):
-    """tracemalloc peak <= estimate for 50,000 (n = 2) / 12,000 queries and nu = 0, 1, 2,
+    """tracemalloc peak <= estimate for 50,000 / 12,000 / 4,000 queries (n = 2, 3, 4), nu = 0, 1, 2,
     with a budget small enough that the evaluation runs in many chunks (work 10 MB / 5 MB);
     and the estimate is not a wild bound (peak >= estimate / 8)."""
     P = RNG.random((1500 if n < 4 else 600, n))
     interp = GERBSInterpolator(P, np.sin(P.sum(1)), cover=cover, memory_budget=40e6 if n == 2 else 20e6)
-    X = RNG.random((50_000 if n == 2 else 12_000, n)) * 0.8 + 0.1
+    X = RNG.random(({2: 50_000, 3: 12_000, 4: 4_000}[n], n)) * 0.8 + 0.1
     for nu in (0, 1, 2):
         est = interp.memory_estimate(len(X), nu)
         out, peak = _peak(lambda: interp(X, nu))

@@ -164,3 +164,35 @@ def test_kappa_below_the_thickness_limit_is_refused():
     P = RNG.random((30, 3))
     with pytest.raises(InvalidParameterError, match="kappa"):
         GERBSInterpolator(P, P[:, 0], kappa=0.7)
+
+
+def test_ball_cover_in_3d_smooth_across_support_spheres_and_c0_kernel_control():
+    """cover='balls' in R^3: the basis functions have equal one-sided first and second
+    derivatives across the support sphere |x - x_i| = R_i of a ball; with the C^0
+    affine kernel (the control) the same check finds the kink."""
+    from gerbs_core.kernels import Affine
+    P = np.random.default_rng(9).random((80, 3))
+    f = smooth(P)[0]
+    jumps = {}
+    for name, kernel in (("erbs", ERBS()), ("affine", Affine())):
+        interp = GERBSInterpolator(P, f, cover="balls", kernel=kernel)
+        rel = []
+        for i in range(0, 80, 8):
+            u = np.random.default_rng(i).normal(size=3)
+            u /= np.linalg.norm(u)
+            x0 = P[i] + interp.R[i] * u
+            if not (np.all(x0 > 0.1) and np.all(x0 < 0.9)):
+                continue
+
+            def grad_of_B(y, i=i):
+                idx, B, Bg, _ = interp.basis(y[None], nu=1)
+                out = np.zeros(3)
+                hit = np.flatnonzero(idx[0] == i)
+                return Bg[0, hit[0]] if hit.size else out
+
+            a, b = _one_sided(grad_of_B, x0, u, h=1e-5 * interp.R[i])
+            rel.append(np.abs(a - b).max() / max(np.abs(a).max(), np.abs(b).max(), 1e-300))
+        jumps[name] = np.array(rel)
+    assert len(jumps["erbs"]) >= 3
+    assert jumps["erbs"].max() <= 1e-6
+    assert np.median(jumps["affine"]) > 1e-2
