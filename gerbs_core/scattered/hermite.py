@@ -14,7 +14,8 @@ from ..errors import InvalidParameterError, InvalidPointSetError
 from . import budget as _budget
 from . import covers as _covers
 from .balls import BallCover
-from .metrics import Euclidean, as_metric
+from .metric_forms import as_metric
+from .metrics import Euclidean
 from .partition import disjoint_basis, general_basis, minimal_basis
 from .radii import check_points, nearest_distances
 from .star_nd import DelaunayStarCover
@@ -64,7 +65,7 @@ class GERBSInterpolator:
         hull simplices (the dominant error of degree 2 near the boundary).
     kernel : GERBS kernel (default ERBS()).
     metric : for cover="balls": a :class:`gerbs_core.scattered.metrics.Metric` or any
-        form of :func:`gerbs_core.scattered.metrics.as_metric` ("euclidean", "l1",
+        form of :func:`gerbs_core.scattered.metric_forms.as_metric` ("euclidean", "l1",
         "linf", ("lp", 3), ("bounded", base), weighted forms, ...). Derivatives
         nu <= metric.max_nu (2 for Euclidean, l_p p >= 2, l_inf, l_1, bounded; 1 for
         1 < p < 2; 0 for quasi-norms).
@@ -158,7 +159,8 @@ class GERBSInterpolator:
             self.cover = BallCover(self.points, self.metric, self.kernel, R=R, rho=rho, tree=self._tree)
             return
         if metric is not None and not isinstance(as_metric(metric, n), Euclidean):
-            raise InvalidParameterError("metric", "star covers use the Euclidean gauge; metric applies to cover='balls'")
+            raise InvalidParameterError(
+                "metric", "star covers use the Euclidean gauge; metric applies to cover='balls'")
         if self.cover_kind != "delaunay" and n != 2:
             raise InvalidParameterError("cover", f"{self.cover_kind} covers are planar: points must have n = 2")
         if n == 1:
@@ -374,7 +376,8 @@ class GERBSInterpolator:
         if isinstance(self.cover, DelaunayStarCover):
             deg = np.diff(self.cover.star_ptr)
             pairs = int(deg[np.maximum(idx, 0)].sum(axis=1).max()) if idx.size else 0
-        rb = _budget.row_bytes(idx.shape[1], self.n, self._V, nu, sum(c[0, 0].size for c in self._coef[: nu + 1]), pairs)
+        coefs = sum(c[0, 0].size for c in self._coef[: nu + 1])
+        rb = _budget.row_bytes(idx.shape[1], self.n, self._V, nu, coefs, pairs)
         step = int(max(1, self._work // rb))
         if step >= len(x):
             return self._eval_chunk(x, idx, edge, nu)

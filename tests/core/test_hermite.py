@@ -216,7 +216,7 @@ def test_chunked_and_spatially_ordered_evaluation_is_identical():
 def test_ball_covers_in_every_metric(metric):
     """General construction (32) with the bumps of section 2.5.1: partition of unity
     and Hermite interpolation up to the order the metric's smoothness allows."""
-    from gerbs_core.scattered.metrics import as_metric
+    from gerbs_core.scattered.metric_forms import as_metric
     P = RNG.random((40, 2))
     v, g, H = smooth(P)
     interp = GERBSInterpolator(P, v, g, H, cover="balls", metric=metric)
