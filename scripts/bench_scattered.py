@@ -1,7 +1,20 @@
-"""Benchmark: GERBS scattered-point Hermite interpolation vs scipy, on Franke's six
-test functions on [0, 1]^2 (one run, same machine state for every method).
+"""Benchmark: GERBS scattered-point Hermite interpolation vs scipy, side by side in one run.
 
-Methods
+Parts (``--parts``, default all):
+
+  2d       Franke's six test functions on [0, 1]^2 (methods below), N = 100 ... 100,000
+  metrics  n = 2, Franke F1, cover="balls" in the metrics of paper section 2.5.1
+           (Euclidean, l1, l_inf, l_p p=3, bounded), N = 500 ... 32,000
+  3d, 4d   values only, points uniform in [0,1]^n, a smooth function (Franke's in R^n)
+           and one with a steep feature (tanh front of width 0.04), 20,000 queries in
+           [0.1, 0.9]^n: GERBSInterpolator (cover "delaunay" = the n-D Delaunay star cover,
+           and "balls"), LinearNDInterpolator, RBFInterpolator(neighbors=50); RMS, order
+           in h = N^(-1/n), fit / eval time (median of repeats), tracemalloc peak
+  million  n = 3, N = 32,000, 10^6 queries, fresh process: time, tracemalloc and RSS peak
+  cold     n = 2, first call (fit + 200 x 200 grid) in a fresh process, N = 4,004
+           clustered points and N = 100,000, against Clough-Tocher
+
+Methods of part 2d
   GERBS-v    GERBSInterpolator(points, values)   (defaults: Delaunay star cover,
              B = Psi (73), Taylor degree 3, derivatives from local cubic LSQ)
   GERBS-v2   same, Taylor degree 2
@@ -13,13 +26,12 @@ Methods
   Linear     scipy.interpolate.LinearNDInterpolator
   RBF50      scipy.interpolate.RBFInterpolator(neighbors=50) (thin-plate spline)
 
-Points: uniform random in [0,1]^2, seeded. Errors on the 300 x 300 grid points
-inside the convex hull of the points. Timings: median of ``--repeats`` runs
-(fit = construction, eval = the grid). Observed order: least-squares slope of
-log RMS vs log h, h = N^(-1/2), over N >= 1000.
+Points: uniform random, seeded. 2d errors on the 300 x 300 grid points inside the convex
+hull. Observed order: least-squares slope of log RMS vs log h.
 
-Usage:  python scripts/bench_scattered.py [--max-n 100000] [--repeats 3] [--scaling]
-        --quick  (N <= 10000, 1 repeat)
+Usage:  python scripts/bench_scattered.py [--parts 2d,metrics,3d,4d,million,cold]
+        [--max-n 100000] [--repeats 3] [--quick] [--scaling]
+        --quick   smaller N everywhere, 1 repeat (a development smoke run)
         --scaling also runs GERBS-H for N = 10^4, 10^5, 10^6 (fit + 10^6 evaluations,
         chunked) and reports time / (N log N) and peak RSS.
 """
@@ -37,6 +49,8 @@ from scipy.interpolate import CloughTocher2DInterpolator, LinearNDInterpolator, 
 from scipy.spatial import Delaunay  # noqa: E402
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import bench_scattered_nd as nd  # noqa: E402
 from gerbs_core.datasets.franke import franke  # noqa: E402
 from gerbs_core.scattered.hermite import GERBSInterpolator  # noqa: E402
 
@@ -55,13 +69,7 @@ def methods(P, k):
     }
 
 
-def timed(fn, repeats):
-    ts, out = [], None
-    for _ in range(repeats):
-        t = time.perf_counter()
-        out = fn()
-        ts.append(time.perf_counter() - t)
-    return out, float(np.median(ts))
+timed = nd.timed
 
 
 def grid_inside(P, m=300):
@@ -178,22 +186,38 @@ def scaling(Ns=(10_000, 100_000, 1_000_000), n_eval=1_000_000):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--parts", type=str, default="2d,metrics,3d,4d,million,cold")
     ap.add_argument("--max-n", type=int, default=100_000)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--functions", type=str, default="1,2,3,4,5,6")
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--scaling", action="store_true")
     a = ap.parse_args()
+    parts = a.parts.split(",")
     if a.quick:
         a.max_n, a.repeats = min(a.max_n, 10_000), 1
-    Ns = [N for N in (100, 1000, 10_000, 100_000) if N <= a.max_n]
-    ks = [int(s) for s in a.functions.split(",")]
-    print(f"# bench_scattered: N = {Ns}, functions {ks}, repeats {a.repeats}, "
+    print(f"# bench_scattered: parts {parts}, repeats {a.repeats}, "
           f"OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']}")
-    rows = run_table(Ns, ks, a.repeats)
-    print_tables(rows, Ns, ks)
-    if 1 in ks:
-        targets(rows, Ns)
+    if "2d" in parts:
+        Ns = [N for N in (100, 1000, 10_000, 100_000) if N <= a.max_n]
+        ks = [int(s) for s in a.functions.split(",")]
+        rows = run_table(Ns, ks, a.repeats)
+        print_tables(rows, Ns, ks)
+        if 1 in ks:
+            targets(rows, Ns)
+    if "metrics" in parts:
+        nd.run_metrics((500, 2000, 8000) if a.quick else (500, 2000, 8000, 32_000))
+    for n, Ns in ((3, (1000, 2000, 4000, 8000, 16_000, 32_000)), (4, (1000, 2000, 4000, 8000, 16_000))):
+        if f"{n}d" not in parts:
+            continue
+        Ns = [N for N in Ns if N <= (4000 if a.quick else 10 ** 9)]
+        rows = nd.run_nd(n, Ns, a.repeats)
+        nd.print_nd(rows, n, Ns, 20_000)
+        nd.verdicts_nd(rows, n, Ns)
+    if "million" in parts:
+        nd.million(N=8000 if a.quick else 32_000, M=200_000 if a.quick else 1_000_000)
+    if "cold" in parts:
+        nd.cold(repeats=1 if a.quick else 3)
     if a.scaling:
         scaling()
 

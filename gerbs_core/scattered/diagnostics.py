@@ -6,8 +6,8 @@ continuum cannot be computed exactly): by default a barycentric lattice of
 resolution ``resolution`` in every Delaunay simplex of the points (n = 2; it
 contains the vertices, edges and interiors of every triangle, where eps0 is
 typically attained on edges and at hull slivers), random barycentric points in
-the simplices for n != 2, and a regular grid inside the domain polygon for the
-Voronoi cover.
+the Delaunay simplices for n >= 3 (the cover's own simplices for the n-D star cover),
+and a regular grid inside the domain polygon for the Voronoi cover.
 """
 from __future__ import annotations
 

@@ -11,11 +11,15 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError, InvalidPointSetError
-from .metrics import Euclidean, as_metric
-from .partition import general_basis, minimal_basis
-from .radii import auto_R, check_points, nearest_distances, validate_radii
-from .taylor import averaged_taylor, estimate_derivatives, taylor_jet
+from . import budget as _budget
 from . import covers as _covers
+from .balls import BallCover
+from .metric_forms import as_metric
+from .metrics import Euclidean
+from .partition import disjoint_basis, general_basis, minimal_basis
+from .radii import check_points, nearest_distances
+from .star_nd import DelaunayStarCover
+from .taylor import averaged_taylor, coefficient_tables, estimate_derivatives, monomials
 
 __all__ = ["GERBSInterpolator"]
 
@@ -38,31 +42,33 @@ class GERBSInterpolator:
         ``fit_degree`` (default ``min(degree + 1, 3)``) through f(x_i) fitted to
         the ~1.8 M + 2 nearest neighbours (M unknown coefficients), weights
         (1 - (r/1.2 h)^2)^2.
-    cover : "delaunay" (default for n = 2), "voronoi", "balls" (default otherwise)
-        or a list of N polygons (K_i, 2), each counter-clockwise and star-shaped w.r.t.
-        its point.
-        * "delaunay": star-1 neighbourhoods of the Delaunay vertices with the smooth
-          gauge (DESIGN 4); domain = convex hull of the points.
+    cover : "delaunay" (default for n >= 2), "voronoi" (n = 2), "balls" (default for
+        n = 1) or a list of N polygons (K_i, 2), each counter-clockwise and
+        star-shaped w.r.t. its point (n = 2).
+        * "delaunay": star-1 neighbourhoods of the Delaunay vertices with a smooth
+          star gauge (DESIGN 4; in n >= 3 the gauge on S^(n-1) of
+          :mod:`gerbs_core.scattered.star_nd`); domain = convex hull of the points.
         * "voronoi": Voronoi cells clipped to ``domain`` (convex polygon; default the
           bounding box enlarged by 5 %), enlarged 2x about their sites; domain = ``domain``.
         * "balls": the general construction, psi_i = b(d(x, x_i)/R_i),
-          phi_i = b(d(x, x_i)/rho_i) (39) in ``metric``; radii from
-          :mod:`gerbs_core.scattered.radii` unless given; domain = union of the supports
-          (contains the convex hull).
+          phi_i = b(d(x, x_i)/rho_i) (39) in ``metric``; radii from the local point
+          spacing with a certified cover of the hull (:mod:`gerbs_core.scattered.radii`)
+          unless given; domain = union of the supports (contains the convex hull).
     basis : "minimal" (B = Psi, (73); default for star covers), "maximal" (phi = psi,
-        (67)) or "general" ((32) with phi_i Euclidean balls of radius rho_i; default
-        for "balls"). "minimal" on balls is a Shepard-type partition without the
-        Hermite property.
+        (67)) or "general" ((32) with phi_i balls of radius rho_i; default
+        for "balls", evaluated as (35) when the phi supports are disjoint (34)).
+        "minimal" on balls is a Shepard-type partition without the Hermite property.
     degree : Taylor degree m of the local functions (0..3, default 3). Orders above
         the given data are estimated (e.g. with exact gradients and Hessians and
         degree 3, only the third derivatives are estimated). Degree 3 gives O(h^4)
         in the interior and keeps the Taylor extrapolation error small in long thin
-        hull triangles (the dominant error of degree 2 near the boundary).
+        hull simplices (the dominant error of degree 2 near the boundary).
     kernel : GERBS kernel (default ERBS()).
-    metric : for cover="balls": a :class:`gerbs_core.scattered.metrics.Metric` or a shorthand
-        ("euclidean", "linf", "l1", "bounded", p). Derivatives nu <= metric.max_nu
-        (2 for Euclidean, l_p p >= 2, l_inf, l_1, bounded; 1 for 1 < p < 2; 0 for
-        quasi-norms).
+    metric : for cover="balls": a :class:`gerbs_core.scattered.metrics.Metric` or any
+        form of :func:`gerbs_core.scattered.metric_forms.as_metric` ("euclidean", "l1",
+        "linf", ("lp", 3), ("bounded", base), weighted forms, ...). Derivatives
+        nu <= metric.max_nu (2 for Euclidean, l_p p >= 2, l_inf, l_1, bounded; 1 for
+        1 < p < 2; 0 for quasi-norms).
     rho, R : radii for the general construction (scalar or (N,)), validated
         against (16), (17).
     regularized : optional callable ``f_jet(y (..., n)) -> [f (..., V), grad (..., V, n),
@@ -71,9 +77,16 @@ class GERBSInterpolator:
         values at x_i are then reproduced only up to O(r^(m+1))); needs degree <= 2.
         Quadrature: see :func:`gerbs_core.scattered.taylor.averaged_taylor`.
     fill_value : returned outside the domain (no support covers x); default NaN.
-    kappa, shrink : star gauge parameters (rho~ >= kappa shrink rho, rho~ <= shrink rho).
+    kappa, shrink : star gauge parameters (rho~ >= kappa shrink rho, rho~ <= shrink rho);
+        kappa default 0.8 in the plane, :func:`~gerbs_core.scattered.star_nd.default_kappa`
+        in n >= 3.
     exact_gauge : use the kinked exact polygon radius (tests only).
-    chunk_size : evaluation chunk (bounded memory).
+    chunk_size : queries per evaluation block (rows are further split so that one
+        block's working arrays stay within the working memory).
+    memory_budget : bytes one call may use (default 1e9): the output, the query
+        ordering and one chunk's working arrays (``min(256 MB, budget / 4)``). A call
+        that would exceed it raises ResourceLimitError before allocating; fitting
+        uses the same working memory for the derivative estimation.
 
     Calling ``interp(x, nu=0|1|2)`` with x (..., n) returns values (..., *vshape),
     gradients (..., *vshape, n) or Hessians (..., *vshape, n, n). All formulas are
@@ -83,55 +96,26 @@ class GERBSInterpolator:
     def __init__(self, points, values, gradients=None, hessians=None, *, cover=None, kernel=None,
                  metric=None, basis=None, degree=3, fit_degree=None, n_neighbors=None, rho=None,
                  R=None, regularized=None, domain=None, fill_value=np.nan, exact_gauge=False,
-                 kappa=0.8, shrink=0.95, chunk_size=20000):
-        pts = check_points(points, "points", min_points=1)
+                 kappa=None, shrink=0.95, chunk_size=20000, memory_budget=1e9):
+        pts, tree = check_points(points, "points", min_points=1, return_tree=True)
+        tree = cKDTree(pts) if tree is None else tree     # the one tree of the points
         N, n = pts.shape
-        self.points, self.n = pts, n
+        self.points, self.n, self._tree = pts, n, tree
         self.kernel = _default_kernel() if kernel is None else kernel
         self.fill_value = fill_value
         self.chunk_size = int(chunk_size)
+        if not self.chunk_size >= 1:
+            raise InvalidParameterError("chunk_size", f"must be >= 1, got {chunk_size!r}")
+        self.memory_budget = float(memory_budget)
+        if not self.memory_budget > 0:
+            raise InvalidParameterError("memory_budget", f"must be > 0 bytes, got {memory_budget!r}")
+        self._work = min(256e6, 0.25 * self.memory_budget)
         if not (isinstance(degree, (int, np.integer)) and 0 <= degree <= 3):
             raise InvalidParameterError("degree", f"Taylor degree must be 0..3, got {degree!r}")
         self.degree = int(degree)
         D = self._data(values, gradients, hessians, N, n)
-        # ---- cover --------------------------------------------------------
-        if cover is None:
-            cover = "delaunay" if n == 2 else "balls"
-        if not isinstance(cover, str):
-            self.cover_kind = "polygons"
-            self._polygons = list(cover)
-        else:
-            if cover not in ("delaunay", "voronoi", "balls"):
-                raise InvalidParameterError("cover", f"unknown cover {cover!r}")
-            self.cover_kind = cover
-        if basis is None:
-            basis = "general" if self.cover_kind == "balls" else "minimal"
-        if basis not in ("minimal", "maximal", "general"):
-            raise InvalidParameterError("basis", f"unknown basis {basis!r}")
-        self.basis_kind = basis
-        gauge_kw = dict(kappa=kappa, shrink=shrink, exact=exact_gauge)
-        self._nearest = None
-        if self.cover_kind == "balls":
-            self._setup_balls(metric, rho, R)
-        else:
-            if metric is not None and not isinstance(metric, Euclidean):
-                raise InvalidParameterError("metric", "star covers use the Euclidean gauge; metric applies to cover='balls'")
-            if self.cover_kind == "delaunay":
-                self.cover, self.tri, self.simplices = _covers.delaunay_cover(pts, self.kernel, **gauge_kw)
-                self.domain = None
-            elif self.cover_kind == "voronoi":
-                if n != 2:
-                    raise InvalidParameterError("cover", "star covers are planar: points must have n = 2")
-                self.cover, self.domain = _covers.voronoi_cover(pts, self.kernel, domain=domain, **gauge_kw)
-            else:
-                if n != 2:
-                    raise InvalidParameterError("cover", "star covers are planar: points must have n = 2")
-                self.cover = _covers.polygon_cover(pts, self._polygons, self.kernel, **gauge_kw)
-                self.domain = None
-            self._centre_tree = None
-            # phi radii for the general basis: (64)/(68) inside the support, halved (Remark 6)
-            if self.basis_kind == "general" or regularized is not None:
-                self.rho = 0.5 * np.minimum(self.cover.min_radius, self._nearest_d())
+        self._setup_cover(cover, basis, metric, rho, R, domain,
+                          dict(kappa=kappa, shrink=shrink, exact=exact_gauge))
         # ---- local functions -------------------------------------------
         if regularized is not None:
             if self.degree > 2:
@@ -144,12 +128,78 @@ class GERBSInterpolator:
                 fd = min(3, self.degree + 1) if fit_degree is None else int(fit_degree)
                 if fd < self.degree:
                     raise InvalidParameterError("fit_degree", f"must be >= degree ({self.degree}), got {fd}")
-                est = estimate_derivatives(pts, D, fd, n_neighbors=n_neighbors)
+                est = estimate_derivatives(pts, D, fd, n_neighbors=n_neighbors, tree=self._tree,
+                                           work_bytes=self._work)
                 D = D + [est[k] for k in range(known + 1, self.degree + 1)]
             D = D[: self.degree + 1]
         self.D = D
+        # T_i and its derivatives as monomial coefficients (gathered per query)
+        self._coef = coefficient_tables(D, n, 2)
 
     # ------------------------------------------------------------------
+    def _setup_cover(self, cover, basis, metric, rho, R, domain, gauge_kw):
+        n = self.n
+        if cover is None:
+            cover = "balls" if n == 1 else "delaunay"
+        if not isinstance(cover, str):
+            self.cover_kind = "polygons"
+        elif cover in ("delaunay", "voronoi", "balls"):
+            self.cover_kind = cover
+        else:
+            raise InvalidParameterError("cover", f"unknown cover {cover!r}")
+        if basis is None:
+            basis = "general" if self.cover_kind == "balls" else "minimal"
+        if basis not in ("minimal", "maximal", "general"):
+            raise InvalidParameterError("basis", f"unknown basis {basis!r}")
+        self.basis_kind = basis
+        self.domain = None
+        self._planar = False
+        if self.cover_kind == "balls":
+            self.metric = as_metric(metric, n)
+            self.cover = BallCover(self.points, self.metric, self.kernel, R=R, rho=rho, tree=self._tree)
+            return
+        if metric is not None and not isinstance(as_metric(metric, n), Euclidean):
+            raise InvalidParameterError(
+                "metric", "star covers use the Euclidean gauge; metric applies to cover='balls'")
+        if self.cover_kind != "delaunay" and n != 2:
+            raise InvalidParameterError("cover", f"{self.cover_kind} covers are planar: points must have n = 2")
+        if n == 1:
+            raise InvalidParameterError("cover", "star covers need n >= 2; use cover='balls' in R^1")
+        if n == 2:
+            self._planar = True
+            gauge_kw["kappa"] = 0.8 if gauge_kw["kappa"] is None else gauge_kw["kappa"]
+            if self.cover_kind == "delaunay":
+                self.cover, self.tri, self.simplices = _covers.delaunay_cover(self.points, self.kernel, **gauge_kw)
+            elif self.cover_kind == "voronoi":
+                self.cover, self.domain = _covers.voronoi_cover(self.points, self.kernel, domain=domain, **gauge_kw)
+            else:
+                self.cover = _covers.polygon_cover(self.points, list(cover), self.kernel, **gauge_kw)
+            self._centre_tree = None
+        else:
+            self.cover = DelaunayStarCover(self.points, self.kernel, tree=self._tree, **gauge_kw)
+            self.tri, self.simplices = self.cover.tri, self.cover.simplices
+        self._rho = None
+
+    @property
+    def R(self):
+        """Size radii R_i of a ball cover (N,)."""
+        return self.cover.R
+
+    @property
+    def rho(self):
+        """Non-degeneracy radii rho_i (N,): the phi balls of the general basis (for star
+        covers inside the support, halved: Remark 6; computed on first use)."""
+        if self.cover_kind == "balls":
+            return self.cover.rho
+        if self._rho is None:
+            self._rho = 0.5 * np.minimum(self.cover.min_radius, self._nearest_d())
+        return self._rho
+
+    @property
+    def cover_guaranteed(self):
+        """True if the automatic ball radii provably cover the hull (psi >= b(0.9))."""
+        return self.cover.certified
+
     def _data(self, values, gradients, hessians, N, n):
         vals = np.array(values, dtype=float, copy=True)
         if vals.ndim == 0 or vals.shape[0] != N:
@@ -180,39 +230,13 @@ class GERBSInterpolator:
         return D
 
     def _nearest_d(self):
-        if self._nearest is None:
-            m = getattr(self, "metric", None) or Euclidean(self.n)
-            self._nearest = nearest_distances(self.points, m)
-        return self._nearest
-
-    def _setup_balls(self, metric, rho, R):
-        N = self.points.shape[0]
-        self.metric = as_metric(metric, self.n)
-        self.domain = None
-        if R is None:
-            if N < 2:
-                raise InvalidPointSetError("points: cover='balls' needs R when N < 2")
-            self.R, self.cover_guaranteed = auto_R(self.points, self.metric)
-        else:
-            self.R = np.broadcast_to(np.asarray(R, float), (N,)).copy()
-            self.cover_guaranteed = False
-        nearest = self._nearest_d()
-        if rho is None:
-            self.rho = np.minimum(0.5 * nearest, self.R)
-        else:
-            self.rho = np.broadcast_to(np.asarray(rho, float), (N,)).copy()
-        validate_radii(self.rho, self.R, nearest)
-        self._tree = cKDTree(self.metric.tree_coords(self.points))
-        bound = self.metric.coord_bound(self.R) * self.metric.w      # in tree coordinates
-        self._qr = float(bound.max())
+        return nearest_distances(self.points, Euclidean(self.n), self._tree)
 
     # ------------------------------------------------------------------
     def _candidates(self, x):
-        """Padded candidate indices (M, K) (-1 empty) and star edges (or None)."""
-        if self.cover_kind == "balls":
-            z = self.metric.tree_coords(x)
-            idx = _covers.padded_ball_query(self._tree, z, self._qr * (1 + 1e-12), p=np.inf)
-            return idx, None
+        """Padded candidate indices (M, K) (-1 empty) and planar star edges (or None)."""
+        if self.cover_kind == "balls" or not self._planar:
+            return self.cover.candidates(x), None
         if self.cover_kind == "delaunay":
             # small tolerance: points on the hull boundary belong to the domain
             simp = self.tri.find_simplex(x, tol=1e-12)
@@ -225,14 +249,13 @@ class GERBSInterpolator:
             inside = _covers.in_convex_polygon(x, self.domain)
             idx[~inside] = -1
         return idx, None
-
     def _star_candidates(self, x):
         """Stars whose support radius reaches x. Typical stars through a KD-tree ball
         query with radius r = the 99 % quantile of the support radii; the few larger ones (cells at
         the domain boundary) by a direct distance check, so the query stays local."""
         R = self.cover.support_radius
         if self._centre_tree is None:
-            self._centre_tree = cKDTree(self.points)
+            self._centre_tree = self._tree            # the fit's tree of the points
             self._r_typ = float(np.quantile(R, 0.99))
             self._big = np.flatnonzero(R > self._r_typ)
         idx = _covers.padded_ball_query(self._centre_tree, x, self._r_typ * (1 + 1e-12))
@@ -250,27 +273,19 @@ class GERBSInterpolator:
 
     def _jets(self, x, idx, edge, nu):
         """psi and phi jets (M, K, ...) of the candidates."""
-        valid = idx >= 0
-        j = np.maximum(idx, 0)
+        want_phi = self.basis_kind == "general"
         if self.cover_kind == "balls":
-            y = x[:, None, :] - self.points[j]
-            psi = list(self.metric.bump_jet(y, self.R[j], self.kernel, nu))
-            phi = list(self.metric.bump_jet(y, self.rho[j], self.kernel, nu)) \
-                if self.basis_kind == "general" else None
-            for jet in (psi, phi):
-                if jet is None:
-                    continue
-                jet[0] = np.where(valid, jet[0], 0.0)
-                if nu >= 1:
-                    jet[1] = np.where(valid[..., None], jet[1], 0.0)
-                if nu >= 2:
-                    jet[2] = np.where(valid[..., None, None], jet[2], 0.0)
-            return psi, phi
-        psi = self.cover.psi_jet(x, idx, edge, nu)
+            return self.cover.jets(x, idx, nu, want_phi)
+        if self._planar:
+            psi = self.cover.psi_jet(x, idx, edge, nu)
+        else:
+            psi = self.cover.psi_jet(x, idx, nu)
         phi = None
-        if self.basis_kind == "general":
+        if want_phi:
+            valid = idx >= 0
+            j = np.maximum(idx, 0)
             y = x[:, None, :] - self.points[j]
-            phi = list(Euclidean(2).bump_jet(y, self.rho[j], self.kernel, nu))
+            phi = list(Euclidean(self.n).bump_jet(y, self.rho[j], self.kernel, nu))
             phi[0] = np.where(valid, phi[0], 0.0)
             if nu >= 1:
                 phi[1] = np.where(valid[..., None], phi[1], 0.0)
@@ -283,8 +298,11 @@ class GERBSInterpolator:
         B (M, K), grad B (M, K, n) or None, Hess B (M, K, n, n) or None).
         Rows outside the domain have NaN B."""
         x = self._check_x(x).reshape(-1, self.n)
-        idx, edge = self._candidates(x)
-        if self.basis_kind != "minimal":
+        return self._basis(x, *self._candidates(x), nu)
+
+    def _basis(self, x, idx, edge, nu):
+        disjoint = self.cover_kind == "balls" and self.cover.disjoint_phi
+        if self.basis_kind != "minimal" and not disjoint:
             # (29) multiplies over j < i: sort candidates by global index, empties last
             key = np.where(idx >= 0, idx, np.iinfo(np.int64).max)
             o = np.argsort(key, axis=1, kind="stable")
@@ -296,6 +314,8 @@ class GERBSInterpolator:
             B = minimal_basis(tuple(psi), nu)
         elif self.basis_kind == "maximal":
             B = general_basis(tuple(psi), tuple(psi), nu)
+        elif disjoint:
+            B = disjoint_basis(tuple(phi), tuple(psi), nu)
         else:
             B = general_basis(tuple(phi), tuple(psi), nu)
         return (idx,) + tuple(B)
@@ -315,6 +335,12 @@ class GERBSInterpolator:
             raise InvalidParameterError("x", f"last axis must have length n={self.n}, got shape {x.shape}")
         return x
 
+    # ------------------------------------------------------------------ evaluation
+    def memory_estimate(self, M, nu=0):
+        """Bytes a call with M query points needs at peak (an upper bound): the output,
+        the query ordering and one chunk of working arrays."""
+        return _budget.call_estimate(int(M), self.n, self._V, nu, self._work)
+
     def __call__(self, x, nu=0):
         if nu not in (0, 1, 2):
             raise InvalidParameterError("nu", f"derivative order must be 0, 1 or 2, got {nu!r}")
@@ -325,41 +351,59 @@ class GERBSInterpolator:
         xf = x.reshape(-1, self.n)
         M = xf.shape[0]
         n, V = self.n, self._V
+        _budget.check_budget(M, n, V, nu, self._work, self.memory_budget)
         out = np.empty((M, V) + (n,) * nu)
         order = self._spatial_order(xf)
-        for s in range(0, M, self.chunk_size):
-            e = min(M, s + self.chunk_size)
+        block = self.chunk_size
+        if self.cover_kind == "balls":       # the candidate search itself within the work
+            block = int(max(1, min(block, self._work // self.cover.search_bytes_per_query())))
+        for s in range(0, M, block):
+            e = min(M, s + block)
             sel = order[s:e] if order is not None else slice(s, e)
-            out[sel] = self._eval_chunk(xf[sel], nu)
+            out[sel] = self._eval_block(xf[sel], nu)
         return out.reshape(lead + self.vshape + (n,) * nu)
 
     def _spatial_order(self, x):
-        """Visit large queries cell by cell (rows of a ~sqrt(M) grid, boustrophedon):
-        the Delaunay walk of ``find_simplex`` and the neighbour gathers then stay
-        local, so the cost per point does not grow with N for unordered queries."""
-        M = x.shape[0]
-        if M <= self.chunk_size or self.n == 1:
+        """The visiting order of large queries (None when one chunk holds them)."""
+        if x.shape[0] <= self.chunk_size or self.n == 1:
             return None
-        lo, hi = x.min(0), x.max(0)
-        k = max(int(np.sqrt(M / 4)), 1)
-        c = np.clip(((x[:, :2] - lo[:2]) / np.maximum(hi[:2] - lo[:2], 1e-300) * k).astype(np.int64), 0, k - 1)
-        row, col = c[:, 1], c[:, 0]
-        col = np.where(row % 2 == 1, k - 1 - col, col)
-        return np.argsort(row * k + col, kind="stable")
+        return _budget.spatial_order(x, max(int((x.shape[0] / 4) ** (1.0 / self.n)), 1))
 
-    def _eval_chunk(self, x, nu):
-        idx, Bv, Bg, Bh = self.basis(x, nu)
+    def _eval_block(self, x, nu):
+        """One block: candidates once, then rows split so the working arrays fit."""
+        idx, edge = self._candidates(x)
+        pairs = 0
+        if isinstance(self.cover, DelaunayStarCover):
+            deg = np.diff(self.cover.star_ptr)
+            pairs = int(deg[np.maximum(idx, 0)].sum(axis=1).max()) if idx.size else 0
+        coefs = sum(c[0, 0].size for c in self._coef[: nu + 1])
+        rb = _budget.row_bytes(idx.shape[1], self.n, self._V, nu, coefs, pairs)
+        step = int(max(1, self._work // rb))
+        if step >= len(x):
+            return self._eval_chunk(x, idx, edge, nu)
+        out = np.empty((len(x), self._V) + (self.n,) * nu)
+        for s in range(0, len(x), step):
+            sl = slice(s, s + step)
+            out[sl] = self._eval_chunk(x[sl], idx[sl], None if edge is None else edge[sl], nu)
+        return out
+
+    def _eval_chunk(self, x, idx, edge, nu):
+        idx, Bv, Bg, Bh = self._basis(x, idx, edge, nu)
         j = np.maximum(idx, 0)
-        d = x[:, None, :] - self.points[j]
-        Tv, Tg, Th = taylor_jet([Dk[j] for Dk in self.D], d, nu)      # (M, K, V, ...)
+        mono = monomials(x[:, None, :] - self.points[j], self.degree)     # (M, K, Q)
+        C = self._coef
         bad = ~np.all(np.isfinite(Bv), axis=1)
         Bv = np.where(np.isfinite(Bv), Bv, 0.0)
         if nu == 0:
-            out = np.einsum("mk,mkv->mv", Bv, Tv)
-        elif nu == 1:
-            out = np.einsum("mki,mkv->mvi", Bg, Tv) + np.einsum("mk,mkvi->mvi", Bv, Tg)
+            out = np.einsum("mk,mkvq,mkq->mv", Bv, C[0][j], mono)
         else:
-            out = (np.einsum("mkij,mkv->mvij", Bh, Tv) + np.einsum("mki,mkvj->mvij", Bg, Tg)
-                   + np.einsum("mkj,mkvi->mvij", Bg, Tg) + np.einsum("mk,mkvij->mvij", Bv, Th))
+            Tv = np.einsum("mkvq,mkq->mkv", C[0][j], mono)
+            Tg = np.einsum("mkvlq,mkq->mkvl", C[1][j], mono[..., : C[1].shape[-1]])
+            if nu == 1:
+                out = np.einsum("mki,mkv->mvi", Bg, Tv) + np.einsum("mk,mkvi->mvi", Bv, Tg)
+            else:
+                Th = np.einsum("mkvlrq,mkq->mkvlr", C[2][j], mono[..., : C[2].shape[-1]])
+                out = (np.einsum("mkij,mkv->mvij", Bh, Tv) + np.einsum("mki,mkvj->mvij", Bg, Tg)
+                       + np.einsum("mkj,mkvi->mvij", Bg, Tg) + np.einsum("mk,mkvij->mvij", Bv, Th))
         out[bad] = self.fill_value
         return out

@@ -37,7 +37,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 
-__all__ = ["Metric", "Euclidean", "Lp", "LInf", "L1", "QuasiNorm", "Bounded", "as_metric"]
+__all__ = ["Metric", "Euclidean", "Lp", "LInf", "L1", "QuasiNorm", "Bounded"]
 
 
 def _weights(weights, n):
@@ -120,6 +120,27 @@ class Metric:
 
     def tree_coords(self, x):
         return np.asarray(x, float) * self.w
+
+    # support geometry, used by the ball search and the cover certificate
+    convex = True          # balls are convex (a norm): a simplex lies in the ball of its vertices
+
+    @property
+    def base(self):
+        """The norm whose balls are this metric's balls (itself, except for Bounded)."""
+        return self
+
+    def base_radius(self, R):
+        """Radius in ``base`` of the ball of radius R (R itself for a norm)."""
+        return np.asarray(R, float)
+
+    def from_base_radius(self, Rb):
+        """Inverse of :meth:`base_radius`."""
+        return np.asarray(Rb, float)
+
+    def search_radius(self, Rb):
+        """(radius, Minkowski p) of a ball in ``tree_coords`` containing the base ball of
+        radius Rb: exact for the l_p norms, the circumscribed l_2 ball otherwise."""
+        return np.asarray(Rb, float), self.tree_p
 
 
 class Euclidean(Metric):
@@ -231,6 +252,11 @@ class _Tensor(Metric):
     def coord_bound(self, R):
         return np.asarray(R, float)[..., None] / self.w
 
+    def search_radius(self, Rb):
+        if self.tree_p == 1.0:
+            return np.asarray(Rb, float), 1.0
+        return np.sqrt(self.n) * np.asarray(Rb, float), 2.0
+
 
 class LInf(_Tensor):
     """(Weighted) l_inf, case 0.1.0: bump = prod_k b(w_k y_k / R), eq. (41)."""
@@ -294,6 +320,11 @@ class QuasiNorm(Metric):
     def coord_bound(self, R):
         return np.asarray(R, float)[..., None] ** (1.0 / self.p) / self.w
 
+    convex = False
+
+    def search_radius(self, Rb):
+        return np.sqrt(self.n) * np.asarray(Rb, float) ** (1.0 / self.p), 2.0
+
 
 class Bounded(Metric):
     """dt = d/(1+d) for a base metric d (eq. (38), case 1.1).
@@ -305,10 +336,28 @@ class Bounded(Metric):
 
     def __init__(self, base: Metric):
         super().__init__(base.n)
-        self.base = base
+        if isinstance(base, Bounded):
+            raise InvalidParameterError("metric", "the base of a bounded metric is itself bounded")
+        self._base = base
         self.max_nu = base.max_nu
         self.tree_p = base.tree_p
         self.w = base.w
+        self.convex = base.convex
+
+    @property
+    def base(self):
+        return self._base
+
+    def base_radius(self, R):
+        R = self._radius(R)
+        return R / (1.0 - R)
+
+    def from_base_radius(self, Rb):
+        Rb = np.asarray(Rb, float)
+        return Rb / (1.0 + Rb)
+
+    def search_radius(self, Rb):
+        return self.base.search_radius(Rb)
 
     def norm(self, y):
         d = self.base.norm(y)
@@ -333,6 +382,11 @@ class Bounded(Metric):
         return dt, gt, ht
 
     def bump_jet(self, y, R, kernel, nu=0):
+        """b(dt(y)/R) for a smooth base norm (eq. (40) read as the bump of dt); for an
+        l_inf / l_1 base (no radial form) the base's tensor bump (41) of the same
+        support, the base ball of radius R/(1-R)."""
+        if isinstance(self.base, _Tensor):
+            return self.base.bump_jet(y, self.base_radius(R), kernel, nu)
         return super().bump_jet(y, self._radius(R), kernel, nu)
 
     def coord_bound(self, R):
@@ -344,32 +398,3 @@ class Bounded(Metric):
 
     def dist_from_tree(self, dt):
         return dt / (1.0 + dt)
-
-
-def as_metric(metric, n):
-    """Normalize the ``metric`` argument: a Metric, None/"euclidean", "linf", "l1",
-    ("lp", p), ("quasi", p), ("bounded", base) or a float p (1 < p < inf)."""
-    if metric is None or (isinstance(metric, str) and metric.lower() in ("euclidean", "l2")):
-        return Euclidean(n)
-    if isinstance(metric, Metric):
-        if metric.n != n:
-            raise InvalidParameterError("metric", f"metric is for n={metric.n}, points have n={n}")
-        return metric
-    if isinstance(metric, str):
-        key = metric.lower()
-        if key in ("linf", "chebyshev", "inf"):
-            return LInf(n)
-        if key in ("l1", "manhattan"):
-            return L1(n)
-        if key in ("bounded", "d/(1+d)"):
-            return Bounded(Euclidean(n))
-    if isinstance(metric, (int, float)):
-        p = float(metric)
-        if p == 2:
-            return Euclidean(n)
-        if p == 1:
-            return L1(n)
-        if p == np.inf:
-            return LInf(n)
-        return Lp(n, p) if p > 1 else QuasiNorm(n, p)
-    raise InvalidParameterError("metric", f"unknown metric {metric!r}")

@@ -7,6 +7,8 @@ where the axis K runs over the candidate elements at each evaluation point
 
 * :func:`normalize`          Psi_i = psi_i / sum_k psi_k                         (27)
 * :func:`general_basis`      B_i = Phi_i + Psi_i Phi_0 with Phi from (29)-(30)   (32)
+* :func:`disjoint_basis`     B_i = phi_i + Psi_i (1 - sum_k phi_k), (35): (32) when the
+  phi supports are disjoint (34), without the ordered product
   (``phi = psi`` gives the maximally supported variant (67), Theorem 4;
   ``phi = 0`` gives B = Psi, the minimally supported (73), Theorem 6)
 * :func:`basis_33`, :func:`basis_35`, :func:`basis_36`: the equivalent forms
@@ -19,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["jmul", "jrecip", "normalize", "general_basis", "basis_33", "basis_35", "basis_36",
+__all__ = ["jmul", "jrecip", "normalize", "general_basis", "disjoint_basis", "basis_33", "basis_35", "basis_36",
            "minimal_basis"]
 
 
@@ -122,6 +124,19 @@ def general_basis(phi, psi, nu):
     g = Phi_g + PsiPhi0[1] if nu >= 1 else None
     h = Phi_h + PsiPhi0[2] if nu >= 2 else None
     return v, g, h
+
+
+def disjoint_basis(phi, psi, nu):
+    """B_i = phi_i + Psi_i (1 - sum_k phi_k), eq. (35), with derivatives up to ``nu``.
+
+    Equal to (32) when the phi supports are disjoint (34) (then Phi_i = phi_i and
+    Phi_0 = 1 - sum phi); any candidate order.
+    """
+    Psi = normalize(psi, nu)
+    S = jsum(phi, nu)
+    rest = (1.0 - S[0], -S[1] if nu >= 1 else None, -S[2] if nu >= 2 else None)
+    PR = jmul(Psi, _expand(rest, nu), nu)
+    return tuple(None if a is None else a + b for a, b in zip(phi, PR))
 
 
 # ---- equivalent forms on full arrays (values only), for the equivalence tests ----

@@ -10,16 +10,21 @@ Automatic choice:
 
 * rho_i = 1/2 min_{j != i} d(x_i, x_j) (Remark 6), so the phi supports are
   disjoint, (34), and the simplified forms (35)/(36) apply;
-* R_i = max_{j in Del(i)} d(x_i, x_j) / margin (margin = 0.9), the longest
-  Delaunay edge at x_i. For a norm (convex balls) every point x of a Delaunay
-  simplex T satisfies d(x, v) <= longest edge of T for each vertex v of T, so
-  every vertex of T has psi_v(x) >= b(margin) > 0: the balls cover the convex
-  hull with a guaranteed thickness (Definition 11). For n = 1 the neighbours are
-  the adjacent points. If Qhull fails (degenerate sets in n >= 2) or n > 6,
-  R_i = 2 x the distance to the (n+1)-th neighbour (no guarantee; check
-  ``diagnostics.thickness``).
+* R_i from the local point spacing: ``factor`` times the distance to the
+  (n+1)-th nearest neighbour (so each ball holds a few neighbours, whatever the
+  density), then enlarged where needed until the balls of radius 0.9 R_i cover
+  every simplex of the Delaunay simplicialization of the hull
+  (:func:`gerbs_core.scattered.cover_check.certify_cover`, a proof, not a sample):
+  psi_j >= b(0.9) somewhere at every point of the hull (Definition 11). Near
+  the hull, where Delaunay simplices are long slivers, only the radii of the
+  points next to a gap grow, so R_i stays O(local spacing) and each query sees
+  O(1) balls. For n = 1 the simplices are the intervals between sorted points.
+  Without a usable simplicialization (Qhull fails, n > 6, quasi-norms, whose
+  balls are not convex) R_i is 2 x the distance to the (n+1)-th neighbour and
+  the cover is not certified (``cover_report`` measures it).
 
-Nearest-neighbour searches use scipy.spatial.cKDTree (N log N).
+Nearest-neighbour searches use one scipy.spatial.cKDTree of the points per fit
+(built by :func:`check_points`, reused), N log N.
 """
 from __future__ import annotations
 
@@ -28,14 +33,17 @@ from scipy.spatial import cKDTree, Delaunay
 from scipy.spatial import QhullError
 
 from ..errors import InvalidParameterError, InvalidPointSetError
-from .metrics import Bounded, QuasiNorm
+from .cover_check import certify_cover
+from .metrics import QuasiNorm
 
-__all__ = ["check_points", "nearest_distances", "auto_rho", "auto_R", "validate_radii"]
+__all__ = ["check_points", "nearest_distances", "auto_rho", "auto_R", "validate_radii",
+           "simplicialization"]
 
 
-def check_points(points, name="points", min_points=1):
+def check_points(points, name="points", min_points=1, return_tree=False):
     """Return a float64 copy (N, n) of ``points``; raise on bad shapes, NaN/inf,
-    duplicates (InvalidPointSetError naming the indices) or too few points."""
+    duplicates (InvalidPointSetError naming the indices) or too few points.
+    ``return_tree``: also return the cKDTree built for the duplicate check (or None)."""
     p = np.array(points, dtype=float, copy=True)
     if p.ndim == 1:
         p = p[:, None]
@@ -46,28 +54,36 @@ def check_points(points, name="points", min_points=1):
     bad = np.flatnonzero(~np.all(np.isfinite(p), axis=1))
     if bad.size:
         raise InvalidPointSetError(f"{name}: non-finite coordinates (NaN or inf) at indices", bad)
+    tree = None
     if p.shape[0] > 1:
-        d, j = cKDTree(p).query(p, k=2)
+        tree = cKDTree(p)
+        d, j = tree.query(p, k=2)
         dup = np.flatnonzero(d[:, 1] == 0.0)
         if dup.size:
             raise InvalidPointSetError(f"{name}: duplicate points at indices", dup)
-    return p
+    return (p, tree) if return_tree else p
 
 
-def nearest_distances(points, metric):
-    """d_i = min_{j != i} d(x_i, x_j) in the metric, exact. Shape (N,)."""
+def _tree_for(points, metric, tree):
+    """A cKDTree in ``metric.tree_coords`` (the shared one when the weights are 1)."""
+    if tree is not None and np.all(metric.w == 1.0):
+        return tree
+    return cKDTree(metric.tree_coords(points))
+
+
+def nearest_distances(points, metric, tree=None):
+    """d_i = min_{j != i} d(x_i, x_j) in the metric, exact. Shape (N,).
+    ``tree``: an optional cKDTree of ``points`` to reuse."""
     n_pts = points.shape[0]
     if n_pts < 2:
         return np.full(n_pts, np.inf)
-    base = metric.base if isinstance(metric, Bounded) else metric
+    base = metric.base
     if isinstance(base, QuasiNorm):
         d = _quasi_nearest(points, base)
     else:
-        tree = cKDTree(base.tree_coords(points))
-        d = tree.query(base.tree_coords(points), k=2, p=base.tree_p)[0][:, 1]
-    if isinstance(metric, Bounded):
-        d = d / (1.0 + d)
-    return d
+        t = _tree_for(points, base, tree)
+        d = t.query(base.tree_coords(points), k=2, p=base.tree_p)[0][:, 1]
+    return metric.from_base_radius(d)
 
 
 def _quasi_nearest(points, metric, k=16):
@@ -88,52 +104,51 @@ def _quasi_nearest(points, metric, k=16):
     return best
 
 
-def auto_rho(points, metric, fraction=0.5):
+def auto_rho(points, metric, fraction=0.5, tree=None):
     """rho_i = fraction * nearest distance; fraction = 1/2 gives (34) (Remark 6)."""
-    return fraction * nearest_distances(points, metric)
+    return fraction * nearest_distances(points, metric, tree)
 
 
-def _neighbour_max(points, metric):
+def simplicialization(points):
+    """Simplices (T, n+1) int covering the convex hull: sorted intervals for n = 1,
+    Qhull's Delaunay for 2 <= n <= 6; None when Qhull fails or n > 6."""
     n_pts, n = points.shape
-    base = metric.base if isinstance(metric, Bounded) else metric
     if n == 1:
         order = np.argsort(points[:, 0])
-        gaps = base.norm(np.diff(points[order], axis=0))
-        left = np.concatenate([[0.0], gaps])
-        right = np.concatenate([gaps, [0.0]])
-        out = np.empty(n_pts)
-        out[order] = np.maximum(left, right)
-        return out, True
-    if n <= 6:
-        try:
-            tri = Delaunay(points)
-            s = tri.simplices
-            out = np.zeros(n_pts)
-            for a in range(n + 1):
-                for b in range(a + 1, n + 1):
-                    d = base.norm(points[s[:, a]] - points[s[:, b]])
-                    np.maximum.at(out, s[:, a], d)
-                    np.maximum.at(out, s[:, b], d)
-            if np.all(out > 0):
-                return out, not isinstance(base, QuasiNorm)
-        except QhullError:
-            pass
-    k = min(n + 2, n_pts)
-    tree = cKDTree(points)
-    idx = tree.query(points, k=k)[1]
-    d = base.norm(points[idx[:, -1]] - points)
-    return 2.0 * d, False
+        return np.stack([order[:-1], order[1:]], axis=1)
+    if n > 6 or n_pts < n + 1:
+        return None
+    try:
+        return Delaunay(points).simplices
+    except QhullError:
+        return None
 
 
-def auto_R(points, metric, margin=0.9):
-    """Size radii R_i (see module doc). Returns (R (N,), guaranteed_cover: bool)."""
+def _local_spacing(points, base, tree, k):
+    """Base-norm distance to the k-th nearest (Euclidean) neighbour, (N,)."""
+    k = min(k, points.shape[0] - 1)
+    idx = tree.query(points, k=k + 1)[1][:, 1:]
+    return base.norm(points[idx] - points[:, None, :]).max(axis=1)
+
+
+def auto_R(points, metric, margin=0.9, factor=2.0, tree=None, simplices="auto"):
+    """Size radii R_i (see module doc). Returns (R (N,), certified: bool).
+
+    ``tree``: cKDTree of ``points`` to reuse; ``simplices``: (T, n+1) simplices of the
+    hull to certify on ("auto": :func:`simplicialization`; None: no certificate).
+    """
     if not (0 < margin <= 1):
         raise InvalidParameterError("margin", f"need 0 < margin <= 1, got {margin}")
-    dmax, guaranteed = _neighbour_max(points, metric)
-    R = dmax / margin
-    if isinstance(metric, Bounded):
-        R = R / (1.0 + R)
-    return R, guaranteed
+    n_pts, n = points.shape
+    tree = cKDTree(points) if tree is None else tree
+    base = metric.base
+    spacing = _local_spacing(points, base, tree, n + 1)
+    if isinstance(simplices, str):
+        simplices = simplicialization(points) if metric.convex else None
+    if simplices is None or not metric.convex:
+        return metric.from_base_radius(2.0 * spacing), False
+    Rb, _ = certify_cover(points, simplices, factor * spacing, base, tree, margin=margin)
+    return metric.from_base_radius(Rb), True
 
 
 def validate_radii(rho, R, nearest, name_rho="rho", name_R="R"):

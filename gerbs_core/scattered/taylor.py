@@ -31,7 +31,8 @@ from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError, InvalidPointSetError
 
-__all__ = ["multi_indices", "taylor_jet", "estimate_derivatives", "averaged_taylor", "tensors_from_coeffs"]
+__all__ = ["multi_indices", "taylor_jet", "estimate_derivatives", "averaged_taylor", "tensors_from_coeffs",
+           "monomials", "coefficient_tables"]
 
 
 def multi_indices(n, kmin, kmax):
@@ -73,22 +74,26 @@ def taylor_jet(D, d, nu):
 
     ``D[k]`` has shape (..., V, n^k) broadcast-compatible with d (..., n).
     Returns value (..., V), gradient (..., V, n), Hessian (..., V, n, n).
+    Each contraction with d is one matmul over the last axis, so the temporaries
+    are never larger than D[k] itself.
     """
     m = len(D) - 1
-    dd = d[..., None, :]                 # broadcast over V
+    n = d.shape[-1]
     v = D[0].copy()
-    g = np.zeros(D[0].shape + (d.shape[-1],)) if nu >= 1 else None
-    h = np.zeros(D[0].shape + (d.shape[-1],) * 2) if nu >= 2 else None
+    g = np.zeros(v.shape + (n,)) if nu >= 1 else None
+    h = np.zeros(v.shape + (n, n)) if nu >= 2 else None
+    lead = np.broadcast_shapes(v.shape[:-1], d.shape[:-1])
     if g is not None:
-        g = np.broadcast_to(g, np.broadcast_shapes(g.shape, dd.shape)).copy()
+        g = np.broadcast_to(g, lead + g.shape[-2:]).copy()
     if h is not None:
-        h = np.broadcast_to(h, np.broadcast_shapes(h.shape, dd.shape + (d.shape[-1],))).copy()
+        h = np.broadcast_to(h, lead + h.shape[-3:]).copy()
     for k in range(1, m + 1):
         A = D[k]
-        # contract trailing axes with d one at a time, keeping partial contractions
         partial = [A]
         for _ in range(k):
-            A = np.sum(A * dd.reshape(dd.shape[:-1] + (1,) * (A.ndim - dd.ndim) + (dd.shape[-1],)), axis=-1)
+            # d as a column (..., 1, ..., 1, n, 1) against A's trailing axis
+            col = d.reshape(d.shape[:-1] + (1,) * (A.ndim - d.ndim) + (n, 1))
+            A = np.matmul(A[..., None, :], col)[..., 0, 0]
             partial.append(A)
         # partial[j]: D_k with j axes contracted -> (k - j) free axes
         v = v + partial[k] / math.factorial(k)
@@ -104,23 +109,27 @@ def _default_neighbors(M):
 
 
 def _monomials(pw, alphas, fact):
-    """u^alpha / alpha! (..., M) for each alpha, from powers pw[k] = u^k of shape (n, ...)."""
-    out = np.empty((len(alphas),) + pw[0].shape[1:])
+    """u^alpha / alpha! as a contiguous (c, M, K) array (one row per alpha), from the
+    powers pw[k] = u^k of shape (n, c, K)."""
+    out = np.empty(pw[0].shape[1:2] + (len(alphas),) + pw[0].shape[2:])
     for j, a in enumerate(alphas):
         m = pw[a[0]][0] * (1.0 / fact[j])
         for k in range(1, len(a)):
             if a[k]:
-                m *= pw[a[k]][k]
-        out[j] = m
-    return np.moveaxis(out, 0, -1)
+                m = m * pw[a[k]][k]
+        out[:, j, :] = m
+    return out
 
 
-def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=None, chunk=20000):
+def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=None, chunk=None,
+                         work_bytes=128e6):
     """Estimate partial derivatives of orders known+1 .. fit_degree at every point.
 
     ``D_known`` = [values (N, V), gradients (N, V, n)?, Hessians (N, V, n, n)?] as given
     (known = len(D_known) - 1). Neighbour values, and neighbour gradients when given,
     are fitted after subtracting the known Taylor terms at x_i.
+    ``tree``: a cKDTree of ``points`` to reuse; the points are processed in chunks whose
+    working arrays take about ``work_bytes`` (or ``chunk`` points at a time).
     Returns a dict k -> tensor (N, V, n^k) for k = known+1 .. fit_degree.
     """
     N, n = points.shape
@@ -139,6 +148,10 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
     K = min(K, N - 1)
     tree = cKDTree(points) if tree is None else tree
     V = D_known[0].shape[1]
+    if chunk is None:
+        rows = K * (1 + (n if known >= 1 else 0))
+        per_point = 8 * (rows * (3 * M + 2 * V + 3 * n + 4) + M * (M + V) * 3)
+        chunk = int(max(64, min(N, work_bytes // per_point)))
     expo = np.array(alphas, dtype=float)                       # (M, n)
     fact = np.array([np.prod([math.factorial(a) for a in al]) for al in alphas])
     order = expo.sum(1)
@@ -158,7 +171,7 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
         pw = [np.ones(ut.shape)]
         for _ in range(fit_degree):
             pw.append(pw[-1] * ut)                                             # u^k per coordinate
-        A = [_monomials(pw, alphas, fact)]                                     # (c, K, M)
+        A = [_monomials(pw, alphas, fact)]                                     # (c, M, K)
         B = [D_known[0][nb] - Tv]                                              # (c, K, V)
         W = [w]
         if known >= 1:
@@ -166,14 +179,15 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
             for l in range(n):
                 dal = [tuple(a[k] - (k == l) if a[k] > 0 or k != l else 0 for k in range(n)) for a in alphas]
                 coef = expo[:, l]
-                A.append(coef * _monomials(pw, dal, fact))
+                A.append(coef[None, :, None] * _monomials(pw, dal, fact))
                 B.append(h[:, None, None] * (D_known[1][nb][..., l] - Tg[..., l]))
                 W.append(w)
-        A = np.concatenate(A, axis=1)
+        At = np.concatenate(A, axis=2) if len(A) > 1 else A[0]                 # (c, M, rows)
         B = np.concatenate(B, axis=1)
         W = np.concatenate(W, axis=1)
-        AWt = np.transpose(A * W[:, :, None], (0, 2, 1))                      # (c, M, K)
-        G = np.matmul(AWt, A)  # batched normal equations (matmul: ~2.5x einsum here)
+        AWt = At * W[:, None, :]                                               # (c, M, rows)
+        # batched normal equations: each 2-D slice is BLAS-able (contiguous / transposed)
+        G = np.matmul(AWt, np.swapaxes(At, 1, 2))
         tr = np.trace(G, axis1=1, axis2=2)
         G += (1e-12 * tr / M)[:, None, None] * np.eye(M)
         c = np.linalg.solve(G, np.matmul(AWt, B))                              # (c, M, V)
@@ -230,4 +244,58 @@ def averaged_taylor(func_jet, centers, radii, degree, n_quad=8):
                 A = np.sum(A * d.reshape(d.shape[:-1] + (1,) * (A.ndim - d.ndim) + (n,)), axis=-1)
             acc = acc + A / math.factorial(k - j)
         out.append(np.einsum("q,nq...->n...", wq, acc))
+    return out
+
+
+def monomials(d, m):
+    """d^alpha for the multi-indices of :func:`multi_indices` (n, 0, m), graded (so the
+    first entries are the monomials of every lower degree): (..., Q)."""
+    n = d.shape[-1]
+    out = [np.ones(d.shape[:-1])]
+    # degree k monomials as products of a degree k-1 monomial and one coordinate:
+    # combinations_with_replacement order, built incrementally
+    prev = [((), out[0])]
+    for _ in range(m):
+        cur = []
+        for combo, val in prev:
+            start = combo[-1] if combo else 0
+            for c in range(start, n):
+                cur.append((combo + (c,), val * d[..., c]))
+        out.extend(v for _, v in cur)
+        prev = cur
+    return np.stack(out, axis=-1)
+
+
+def coefficient_tables(D, n, nu):
+    """Monomial coefficients of T_i and of its first and second derivatives.
+
+    D = [D0 (N, V), D1 (N, V, n), ..., Dm (N, V, n^m)] (symmetric derivative tensors).
+    Returns [C0 (N, V, Q_m), C1 (N, V, n, Q_{m-1}), C2 (N, V, n, n, Q_{m-2})][: nu + 1]
+    with T_i(x) = C0 . d^alpha, d_l T_i = C1[:, :, l] . d^beta, d_l d_k T_i =
+    C2[:, :, l, k] . d^gamma (d = x - x_i, monomials as in :func:`monomials`).
+    Exact: C_alpha = D^alpha f(x_i) / alpha!.
+    """
+    m = len(D) - 1
+    N, V = D[0].shape
+
+    def table(shift):
+        """Coefficients of the derivative d^shift T (shift a multi-index)."""
+        alphas = multi_indices(n, 0, max(m - sum(shift), -1)) if m >= sum(shift) else []
+        C = np.zeros((N, V, max(len(alphas), 1)))
+        for q, b in enumerate(alphas):
+            a = tuple(bi + si for bi, si in zip(b, shift))
+            k = sum(a)
+            idx = tuple(c for c in range(n) for _ in range(a[c]))
+            fact = float(np.prod([math.factorial(x) for x in b]))
+            C[:, :, q] = D[k][(slice(None), slice(None)) + idx] / fact
+        return C
+
+    zero = (0,) * n
+    out = [table(zero)]
+    if nu >= 1:
+        e = np.eye(n, dtype=int)
+        out.append(np.stack([table(tuple(e[l])) for l in range(n)], axis=2))
+    if nu >= 2:
+        out.append(np.stack([np.stack([table(tuple(e[l] + e[k])) for k in range(n)], axis=2)
+                             for l in range(n)], axis=2))
     return out

@@ -2,6 +2,7 @@
 order independence, on random point sets in n = 1, 2, 3 and all covers/bases."""
 import numpy as np
 import pytest
+from scipy.spatial import Delaunay
 
 from gerbs_core import GERBSInterpolator
 
@@ -215,14 +216,15 @@ def test_chunked_and_spatially_ordered_evaluation_is_identical():
 def test_ball_covers_in_every_metric(metric):
     """General construction (32) with the bumps of section 2.5.1: partition of unity
     and Hermite interpolation up to the order the metric's smoothness allows."""
-    from gerbs_core.scattered.metrics import as_metric
+    from gerbs_core.scattered.metric_forms import as_metric
     P = RNG.random((40, 2))
     v, g, H = smooth(P)
     interp = GERBSInterpolator(P, v, g, H, cover="balls", metric=metric)
-    x = np.concatenate([RNG.random((200, 2)), P])
+    x = RNG.random((300, 2))
+    x = np.concatenate([x[Delaunay(P).find_simplex(x) >= 0], P])     # the certified domain
     Bm = interp.basis_matrix(x)
     ok = np.isfinite(Bm).all(1)
-    assert ok.all()
+    assert ok.all() and interp.cover_guaranteed == as_metric(metric, 2).convex
     assert np.max(np.abs(Bm.sum(1) - 1)) <= 1e-14 and Bm.min() >= 0
     nu_max = as_metric(metric, 2).max_nu
     for nu, ref in list(zip((0, 1, 2), (v, g, H)))[: nu_max + 1]:

@@ -5,7 +5,8 @@ import pytest
 
 from gerbs_core.errors import InvalidParameterError
 from gerbs_core.kernels import ERBS
-from gerbs_core.scattered.metrics import L1, Bounded, Euclidean, LInf, Lp, QuasiNorm, as_metric
+from gerbs_core.scattered.metric_forms import as_metric
+from gerbs_core.scattered.metrics import L1, Bounded, Euclidean, LInf, Lp, QuasiNorm
 
 K = ERBS()
 RNG = np.random.default_rng(3)
@@ -103,3 +104,38 @@ def test_quasi_norm_is_not_convex_but_star_shaped():
     assert m.norm(0.5 * (a + b)) > 1                 # midpoint outside: not convex
     t = np.linspace(0, 1, 11)[:, None]
     assert np.all(np.diff(m.norm(t * (a + b) * 0.3)) > 0)   # monotone along rays: star-shaped
+
+
+@pytest.mark.parametrize("form,cls,p,w", [
+    ("euclidean", Euclidean, None, 1.0), (("euclidean", [1.0, 2.0, 3.0]), Euclidean, None, [1.0, 2.0, 3.0]),
+    ("l2", Euclidean, None, 1.0), ("linf", LInf, None, 1.0), (("linf", 2.0), LInf, None, 2.0),
+    ("chebyshev", LInf, None, 1.0), ("l1", L1, None, 1.0), (("manhattan", [1, 1, 2]), L1, None, [1, 1, 2]),
+    (("lp", 3), Lp, 3.0, 1.0), (("lp", 3, [2.0, 1.0, 1.0]), Lp, 3.0, [2.0, 1.0, 1.0]), (("LP", 2), Euclidean, None, 1.0),
+    (("lp", 1), L1, None, 1.0), (("lp", np.inf), LInf, None, 1.0), (("quasi", 0.5), QuasiNorm, 0.5, 1.0),
+    (("quasi", 0.5, 3.0), QuasiNorm, 0.5, 3.0), (3, Lp, 3.0, 1.0), (2.5, Lp, 2.5, 1.0),
+])
+def test_every_documented_metric_form(form, cls, p, w):
+    """Each form the as_metric docstring lists gives the right metric (the issue found
+    ("lp", 3) and ("bounded", ...) refused as unknown)."""
+    m = as_metric(form, 3)
+    assert type(m) is cls
+    np.testing.assert_array_equal(m.w, np.broadcast_to(np.asarray(w, float), (3,)))
+    if p is not None:
+        assert m.p == p
+
+
+def test_bounded_forms_and_refusals():
+    for form, base in (("bounded", Euclidean), (("bounded",), Euclidean), (("bounded", "linf"), LInf),
+                       (("bounded", ("lp", 3)), Lp), (("d/(1+d)", ("l1", 2.0)), L1),
+                       (("bounded", Lp(3, 4.0)), Lp)):
+        m = as_metric(form, 3)
+        assert isinstance(m, Bounded) and type(m.base) is base, form
+    y = RNG.random((50, 3)) - 0.5
+    m = as_metric(("bounded", "linf"), 3)
+    d = m.norm(y)
+    v = m.bump_jet(y, np.full(50, 0.3), K)[0]
+    assert np.all(v[d >= 0.3] == 0) and np.all(v[d < 0.27] > 0)       # the d/(1+d) ball
+    for bad in (("lp",), ("lp", 3, 1.0, 2.0), ("foo", 1), ("bounded", "bounded"), ("quasi", 2.0),
+                True, -1.0, ("bounded", "l1", "l2"), [], Euclidean(2)):
+        with pytest.raises(InvalidParameterError, match="metric|p"):
+            as_metric(bad, 3)

@@ -6,7 +6,7 @@ from gerbs_core.kernels import ERBS
 from gerbs_core.scattered.metrics import Euclidean
 from gerbs_core.scattered.partition import (basis_33, basis_35, basis_36, general_basis, jmul, jrecip,
                                   minimal_basis, normalize)
-from gerbs_core.scattered.radii import auto_R, auto_rho
+from gerbs_core.scattered.radii import auto_R, auto_rho, simplicialization
 
 K = ERBS()
 RNG = np.random.default_rng(21)
@@ -17,11 +17,15 @@ def families(n, N=25, M=300, rho_fraction=0.5):
     m = Euclidean(n)
     R, _ = auto_R(P, m)
     rho = auto_rho(P, m, rho_fraction)
-    x = np.concatenate([RNG.random((M, n)), P, P + 0.3 * rho[:, None] / np.sqrt(n)])
+    lam = RNG.dirichlet(np.ones(n + 1), size=M // (n + 1) + 1)          # points of the hull
+    simp = simplicialization(P)
+    x = np.einsum("tk,tkn->tn", lam, P[simp[RNG.integers(0, len(simp), len(lam))]])
+    x = np.concatenate([x, P, P + 0.3 * rho[:, None] / np.sqrt(n)])
     y = x[:, None, :] - P[None]
     psi = m.bump_jet(y, R[None], K, 2)
     phi = m.bump_jet(y, rho[None], K, 2)
     keep = psi[0].sum(1) > 0
+    families.at_points = np.flatnonzero(np.all(y[keep] == 0.0, axis=-1).any(axis=1))
     return [tuple(a[keep] for a in psi), tuple(a[keep] for a in phi)]
 
 
@@ -34,8 +38,8 @@ def test_general_basis_is_a_convex_partition_of_unity_with_hermite_property(n):
     assert np.abs(B[1].sum(1)).max() <= 1e-12 * max(1, np.abs(B[1]).max())
     assert np.abs(B[2].sum(1)).max() <= 1e-12 * max(1, np.abs(B[2]).max())
     # at x_i: B_j(x_i) = delta_ij with vanishing derivatives (Theorem 1 (3))
-    at = np.flatnonzero(np.isclose(phi[0].max(1), 1.0, rtol=0, atol=0))
-    assert len(at) > 0
+    at = families.at_points                    # the rows x = x_i
+    assert len(at) == 25
     i = phi[0][at].argmax(1)
     np.testing.assert_array_equal(B[0][at, i], 1.0)
     assert np.abs(B[1][at]).max() == 0 and np.abs(B[2][at]).max() == 0

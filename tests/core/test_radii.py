@@ -4,8 +4,8 @@ import pytest
 
 from gerbs_core.errors import InvalidParameterError, InvalidPointSetError
 from gerbs_core.scattered.metrics import L1, Bounded, Euclidean, LInf, Lp, QuasiNorm
-from gerbs_core.scattered.radii import auto_R, auto_rho, check_points, nearest_distances, validate_radii
-from scipy.spatial import Delaunay
+from gerbs_core.scattered.radii import (auto_R, auto_rho, check_points, nearest_distances, simplicialization,
+                                        validate_radii)
 
 RNG = np.random.default_rng(11)
 
@@ -31,24 +31,59 @@ def test_remark6_rho_gives_disjoint_phi_supports():
         assert np.all(rho[:, None] + rho[None, :] <= D * (1 + 1e-12))
 
 
+def _hull_samples(P, simp, per=20):
+    n = P.shape[1]
+    lam = RNG.dirichlet(np.ones(n + 1) * 0.3, size=(len(simp), per))   # near faces and vertices too
+    return np.einsum("tsk,tkn->tsn", lam, P[simp]).reshape(-1, n)
+
+
+def _uncovered(P, R, m, x, margin=0.9):
+    """Samples x with no point x_j at distance <= margin R_j (base norm), brute force."""
+    Rb = m.base_radius(R)
+    d = m.base.norm(x[:, None, :] - P[None, :, :])
+    return int((~np.any(d <= margin * Rb[None, :] * (1 + 1e-12), axis=1)).sum())
+
+
 @pytest.mark.parametrize("n", [1, 2, 3])
 def test_auto_R_covers_the_hull_with_margin(n):
-    """Every point of a Delaunay simplex is within 0.9 R_v of each vertex v, so the
-    psi balls cover the hull and psi_v >= b(0.9) there (Definition 11)."""
-    P = RNG.random((40, n))
-    for m in (Euclidean(n), LInf(n), L1(n), Bounded(Euclidean(n))):
+    """The automatic radii are certified: every point of the hull is within 0.9 R_j of
+    some x_j (so psi_j >= b(0.9) there, Definition 11), checked by brute force on
+    samples of every simplex. The radii are local: R_i / (local spacing) is bounded
+    (no long hull edge inflates them) and sum_j [x in B_j] stays O(1)."""
+    P = np.random.default_rng(n).random((150, n))
+    simp = simplicialization(P)
+    x = _hull_samples(P, simp, per=8)
+    for m in (Euclidean(n), LInf(n), L1(n), Lp(n, 3.0), Bounded(Euclidean(n)), Euclidean(n, [2.0] * n)):
         R, guaranteed = auto_R(P, m)
-        assert guaranteed
-        if n == 1:
-            order = np.argsort(P[:, 0])
-            simp = np.stack([order[:-1], order[1:]], 1)
-        else:
-            simp = Delaunay(P).simplices
-        lam = RNG.dirichlet(np.ones(n + 1), size=(len(simp), 10))
-        x = np.einsum("tsk,tkn->tsn", lam, P[simp])
-        d = m.norm(x[:, :, None, :] - P[simp][:, None, :, :])          # (T, s, n+1)
-        Rv = R[simp][:, None, :]
-        assert np.all(d < 0.9 * Rv + 1e-12 if not isinstance(m, Bounded) else d < Rv)
+        assert guaranteed, type(m).__name__
+        assert _uncovered(P, R, m, x) == 0, type(m).__name__
+        spacing = np.sort(m.base.norm(P[:, None] - P[None]), axis=1)[:, n + 1]
+        ratio = m.base_radius(R) / spacing
+        assert np.median(ratio) <= 3.0 and ratio.max() <= 12, (type(m).__name__, ratio.max())
+
+
+def test_uncertified_radii_leave_holes_the_check_finds():
+    """The control: the local-spacing radii before certification leave samples of the
+    hull uncovered (so the test above can fail), and certify_cover repairs them by
+    enlarging only some radii."""
+    from scipy.spatial import cKDTree
+    from gerbs_core.scattered.cover_check import certify_cover
+    P = np.random.default_rng(5).random((150, 3))
+    m = Euclidean(3)
+    simp = simplicialization(P)
+    x = _hull_samples(P, simp, per=8)
+    spacing = np.sort(m.norm(P[:, None] - P[None]), axis=1)[:, 4]
+    raw = 0.6 * spacing
+    assert _uncovered(P, raw, m, x) > 0
+    fixed, n_enlarged = certify_cover(P, simp, raw, m, cKDTree(P))
+    assert _uncovered(P, fixed, m, x) == 0
+    assert 0 < n_enlarged < len(P) and np.all(fixed >= raw)
+
+
+def test_quasi_norm_radii_are_not_claimed_certified():
+    P = RNG.random((50, 2))
+    R, guaranteed = auto_R(P, QuasiNorm(2, 0.5))
+    assert not guaranteed and np.all(R > 0)
 
 
 def test_check_points_errors_name_indices():

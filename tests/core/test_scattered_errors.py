@@ -90,7 +90,9 @@ def test_mismatched_shapes():
     with pytest.raises(InvalidParameterError, match="nu"):
         interp(P, nu=3)
     with pytest.raises(InvalidParameterError, match="cover"):
-        GERBSInterpolator(RNG.random((20, 3)), v, cover="delaunay")
+        GERBSInterpolator(RNG.random((20, 3)), v, cover="voronoi")
+    with pytest.raises(InvalidParameterError, match="cover"):
+        GERBSInterpolator(RNG.random((20, 1)), v, cover="delaunay")
     with pytest.raises(InvalidParameterError, match="degree"):
         GERBSInterpolator(P, v, degree=4)
 
