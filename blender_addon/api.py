@@ -2,7 +2,7 @@
 
     import blender_addon; blender_addon.register()
     from blender_addon import api
-    mod = api.add_surface(obj, resolution=4, degree=2, kernel="erbs")
+    mod = api.add_surface(obj, resolution=4, kernel="erbs")
     api.update(obj)            # after editing obj.data from a script (optional:
                                # any depsgraph update does it too)
     api.apply(obj)             # bake into obj.data
@@ -10,9 +10,8 @@
 
 Settings (keywords, see ``ids.SETTINGS`` and ``settings.validate``): kernel
 ("erbs", "bfbs", "logistic", "affine"), alpha, beta, gamma, lam, sigma (ERBS),
-bfbs_left, bfbs_right, degree (0..3), resolution (segments per edge, 1..64),
-mode ("regular", "metric"), boundary ("keep", "straighten"), use_normals,
-memory_budget (bytes).
+bfbs_left, bfbs_right, resolution (segments per edge, 1..64), boundary ("keep",
+"straighten"), use_normals, memory_budget (bytes).
 
 Errors (all ``gerbs_core.errors.GERBSError``):
 

@@ -3,12 +3,11 @@
 ``sync(obj, mod, depsgraph)`` reads what the modifier receives (see
 :func:`read_input`) and compares it and the settings with what was last built:
 
-* same topology and settings -> only ``W @ X`` with the cached sparse stencil
-  (DESIGN section 5: in both face-shape modes every output coordinate is a fixed
-  linear combination of the vertex positions; mode ``metric`` keeps the rest
-  edge lengths bound at build time until ``force=True``, the "Rebuild"
-  operator); when only a few vertices moved (a drag) just their columns are
-  applied, ``P += W[:, moved] dX``, so the cost is local;
+* same topology and settings -> only the cached stencil applied to the new
+  positions (every output coordinate is a fixed linear combination of the vertex
+  positions for the rest shape bound at build time, kept until ``force=True``, the
+  "Rebuild" operator); when only a few vertices moved (a drag) just their
+  contribution is applied (``Stencil.apply_moved``), so the cost is local;
 * anything else -> a full rebuild through ``gerbs_core`` and a new result mesh;
 * nothing changed -> nothing is written (this is what stops the feedback loop
   of the depsgraph handler: writing the result triggers another update).
@@ -40,7 +39,7 @@ from . import mesh_io, results
 from . import settings as settings_mod
 from .errors import PREFIX, format_error
 from .progress import silent
-from .stencil_update import apply_stencil, product
+from .stencil_update import apply_stencil
 
 log = logging.getLogger(__name__)
 
@@ -52,10 +51,10 @@ class SurfaceState:
     settings: tuple
     input: mesh_io.MeshInput
     positions: np.ndarray  # (V, 3) float64 of input.positions
-    matrix: object = None  # scipy.sparse csr (P, V)
+    stencil: object = None  # gerbs_core.mesh.stencil.Stencil (P points from V positions)
+    rest: np.ndarray | None = None  # (V, 3) the rest shape the stencil is bound to
     triangles: np.ndarray | None = None  # (T, 3) int32 output triangles as written
     points: np.ndarray | None = None  # (P, 3) float64 last output (for partial updates)
-    matrix_csc: object = None  # W as csc, made on the first partial update
     partial_updates: int = 0
     n_points: int = 0
     n_triangles: int = 0
@@ -69,6 +68,13 @@ class SurfaceState:
 class SyncResult:
     status: str  # "unchanged" | "updated" | "rebuilt" | "error"
     message: str = ""
+    rebind: bool = False  # a linear preview of a Follow surface: rebuild when edits settle
+
+
+def dragging(obj) -> bool:
+    """An interactive Edit Mode session (a window manager exists, not background): the
+    one case where a Follow surface is previewed linearly while the user drags."""
+    return obj.mode == "EDIT" and not bpy.app.background
 
 
 _states: dict[tuple, SurfaceState] = {}
@@ -107,7 +113,7 @@ def set_error(obj, mod, message: str) -> None:
 
 
 def _fail(obj, mod, key, st, message, progress) -> SyncResult:
-    st.error, st.matrix = message, None
+    st.error, st.stencil = message, None
     _states[key] = st
     set_error(obj, mod, message)
     progress(1.0, "error")
@@ -222,17 +228,21 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     _copy_materials(obj.data, res.data)
     same = (not force and st is not None and inp is not None and st.settings == skey
             and st.result_uid == res.session_uid and st.input is not None)
-    if same and st.input.same(inp):
+    linear = settings["rest"] == "bound" or dragging(obj)
+    if same and st.input.same(inp) and (linear or st.rest is None
+                                        or np.array_equal(st.rest, st.positions)):
         return SyncResult("error", st.error) if st.error else SyncResult("unchanged")
-    if (same and not st.error and st.matrix is not None and st.input.same_topology(inp)
-            and np.array_equal(st.input.materials, inp.materials)
+    if (same and linear and not st.error and st.stencil is not None
+            and st.input.same_topology(inp) and np.array_equal(st.input.materials, inp.materials)
             and len(res.data.vertices) == st.n_points and np.all(np.isfinite(inp.positions))):
         X = inp.positions.astype(np.float64)
         mesh_io.write_snapshot(res.data, inp, positions_only=True)
         mesh_io.write_positions(res.data, apply_stencil(st, X))  # (tags the mesh)
         st.input, st.positions = inp, X
         st.update_seconds = time.perf_counter() - t0
-        return SyncResult("updated")
+        # Follow: the linear update is a preview; the surface of the current mesh is
+        # rebuilt when the drag pauses (handlers.settle) or Edit Mode is left
+        return SyncResult("updated", rebind=settings["rest"] == "follow")
     if inp is None:
         return _fail(obj, mod, key, blank, f"{PREFIX}internal error: the result shown "
                      f"carries no record of its input", progress)
@@ -240,8 +250,8 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
 
 
 def _build(settings, inp, progress):
-    """(points (P, 3), triangles (T, 3), stencil matrix or None, lattice or None, surface)."""
-    from gerbs_core.mesh_surface import BlendingSurface
+    """(points (P, 3), triangles (T, 3), stencil or None, lattice or None, surface)."""
+    from gerbs_core.mesh.surface import BlendingSurface
 
     args = settings_mod.core_arguments(settings)
     X = inp.positions.astype(np.float64)
@@ -254,18 +264,17 @@ def _build(settings, inp, progress):
         return P, triangles, None, None, surface
     progress(0.35, "building stencil")
     stencil = surface.stencil(args.resolution)
-    W = stencil.matrix.tocsr()
-    return product(W, X), stencil.triangles, W, stencil.lattice, surface
+    return stencil.apply(X), stencil.triangles, stencil, stencil.lattice, surface
 
 
 def _rebuild(obj, mod, res, settings, skey, inp, progress, t0):
     from gerbs_core.errors import GERBSError
 
     key = state_key(obj, mod)
-    st = SurfaceState(settings=skey, input=inp, positions=inp.positions.astype(np.float64),
-                      result_uid=res.session_uid)
+    X = inp.positions.astype(np.float64)
+    st = SurfaceState(settings=skey, input=inp, positions=X, rest=X, result_uid=res.session_uid)
     try:
-        P, triangles, st.matrix, lattice, surface = _build(settings, inp, progress)
+        P, triangles, st.stencil, lattice, surface = _build(settings, inp, progress)
     except GERBSError as exc:
         return _fail(obj, mod, key, st, format_error(exc), progress)
     except Exception as exc:  # a defect of the core must not reach Blender raw

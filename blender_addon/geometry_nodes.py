@@ -4,8 +4,8 @@ Why this route (DESIGN section 7). Blender has no Python API for new modifier
 types; a Geometry Nodes modifier is the one modifier Python can define. One
 group (built by :mod:`node_tree`) serves every object:
 
-* the settings (kernel, kernel parameters, degree, resolution, face shape,
-  boundary rule, normals, memory budget) are group inputs, so they live on the
+* the settings (kernel, kernel parameters, resolution, boundary rule, normals,
+  memory budget) are group inputs, so they live on the
   modifier (``mod["Socket_N"]``), show in its panel, are animatable and saved
   in the .blend;
 * the surface itself is computed by ``gerbs_core`` and written by the add-on

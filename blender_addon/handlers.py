@@ -11,6 +11,9 @@ depsgraph a second time, without running the callbacks again, when a
 post-update callback tagged data (our write into the result object), so one
 ``depsgraph.update()`` or ``frame_set`` already shows the new surface.
 Background mode has no timers, which is why the work is not deferred to one.
+The one timer: a Follow surface dragged in Edit Mode is updated linearly while
+the drag goes on and rebuilt from the current mesh once the edits pause for
+``SETTLE_SECONDS`` (:func:`settle`; interactive sessions only).
 
 Garbage (results of removed modifiers, meshes of result objects deleted by
 hand, the unused node group) is collected when a synced object lost its GERBS
@@ -26,6 +29,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import time
 
 import bpy
 from bpy.app.handlers import persistent
@@ -43,6 +47,8 @@ _outcomes = None  # {state key: sync results} of the handler syncs during sync_n
 _watch = results.Watch()
 _errors: dict[tuple, str] = {}  # state key -> current error message (shown in the status bar)
 status_message = None  # what _status_text last put in the status bar (None: the default)
+SETTLE_SECONDS = 0.4  # a Follow surface is rebuilt once its Edit Mode drag paused this long
+_settling: dict[tuple, tuple] = {}  # state key -> (object name, time of its last preview)
 
 
 def _window_manager():
@@ -111,12 +117,32 @@ def _sync_one(obj, depsgraph, force: bool) -> None:
         _record(key, obj.name, [r.message for r in outcome if r.status == "error"])
         if _outcomes is not None:
             _outcomes[key] = outcome
+        if any(r.rebind for r in outcome):
+            _settling[key] = (obj.name, time.monotonic())
+            if not bpy.app.timers.is_registered(settle):
+                bpy.app.timers.register(settle, first_interval=SETTLE_SECONDS)
     except Exception:  # a handler must never raise into Blender
         log.exception("GERBS: sync of %s failed", obj.name)
         message = f"{PREFIX}internal error (see the system console)"
         for mod in mods:
             engine.set_error(obj, mod, message)
         _record(key, obj.name, [message])
+
+
+def settle():
+    """Timer: rebuild the Follow surfaces whose Edit Mode drag paused (the linear preview
+    becomes the surface of the current mesh). Returns the next interval, or None (done)."""
+    now = time.monotonic()
+    for key, (name, seen) in list(_settling.items()):
+        if now - seen < SETTLE_SECONDS:
+            continue
+        del _settling[key]
+        obj = bpy.data.objects.get(name)
+        mods = gn.gerbs_modifiers(obj) if obj is not None else ()
+        if not mods or engine.state_key(obj, mods[0]) != key or _busy:
+            continue
+        _run([obj], bpy.context.evaluated_depsgraph_get(), False, force=True)
+    return SETTLE_SECONDS / 2 if _settling else None
 
 
 def _collect() -> None:
@@ -270,6 +296,9 @@ def register() -> None:
 
 
 def unregister() -> None:
+    _settling.clear()
+    if bpy.app.timers.is_registered(settle):
+        bpy.app.timers.unregister(settle)
     if status_message is not None:  # our message must not outlive the add-on in the status bar
         _status_text(None)
     _errors.clear()

@@ -30,7 +30,7 @@ SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
 NODE_GROUP_NAME = "GERBS Blending Surface"
 MODIFIER_NAME = "GERBS Blending Surface"
 GROUP_TAG = "gerbs_group_version"  # custom property on the node group
-GROUP_VERSION = 2  # 2: the group checks the result against the geometry it receives
+GROUP_VERSION = 3  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest Shape
 RESULT_TAG = "gerbs_result"  # custom property on each hidden result object and its mesh
 RESULT_NAME = "GERBS Result"  # prefix of the result object / mesh names
 
@@ -54,8 +54,8 @@ STALE_MESSAGE = ("GERBS: the surface is out of date with this mesh or its settin
 
 # enum-like settings: python value -> menu item label (in this order)
 KERNELS = {"erbs": "ERBS", "bfbs": "BFBS", "logistic": "Logistic", "affine": "Affine"}
-MODES = {"regular": "Regular", "metric": "Metric"}
 BOUNDARIES = {"keep": "Keep", "straighten": "Straighten"}
+REST_SHAPES = {"follow": "Follow", "bound": "Bound"}
 
 
 @dataclass(frozen=True)
@@ -92,14 +92,16 @@ SETTINGS = (
                "BFBS kernel exponent i_left (F = regularized incomplete beta I_t(i+1, j+1))"),
     SocketSpec("bfbs_right", "BFBS Right", "NodeSocketInt", 2, 0, 16,
                "BFBS kernel exponent i_right"),
-    SocketSpec("degree", "Degree", "NodeSocketInt", 2, 0, 3,
-               "Degree of the local polynomial functions"),
     SocketSpec("resolution", "Resolution", "NodeSocketInt", 4, 1, 64,
                "Segments per mesh edge in the output tessellation"),
-    SocketSpec("mode", "Face Shape", "NodeSocketMenu", "regular", items=MODES,
-               description="Regular: topology only (like subdivision); Metric: 3D edge lengths"),
     SocketSpec("boundary", "Boundary", "NodeSocketMenu", "keep", items=BOUNDARIES,
                description="Boundary vertices: keep the corners or straighten the border"),
+    SocketSpec("rest", "Rest Shape", "NodeSocketMenu", "follow", items=REST_SHAPES,
+               description="Follow: the surface is always that of the current mesh (rebuilt "
+                           "after an edit; during an Edit Mode drag it updates fast and is "
+                           "rebuilt when the drag pauses). Bound: the shape at the last "
+                           "Rebuild stays the rest shape and edits update the surface as a "
+                           "fast linear deformation of it, like a bound deform modifier"),
     SocketSpec("use_normals", "Use Custom Normals", "NodeSocketBool", False,
                description="Use the base mesh's vertex normals as Hermite data"),
     SocketSpec("memory_budget", "Memory Budget (MB)", "NodeSocketFloat", 2000.0, 1.0, 1.0e6,

@@ -116,6 +116,5 @@ def core_arguments(settings: dict) -> CoreArguments:
         "logistic": lambda s: LogisticStep(),
         "affine": lambda s: Affine(),
     }
-    surface = {"degree": settings["degree"], "mode": settings["mode"],
-               "boundary": settings["boundary"], "memory_budget": settings["memory_budget"]}
+    surface = {"boundary": settings["boundary"], "memory_budget": settings["memory_budget"]}
     return CoreArguments(kernels[settings["kernel"]](settings), surface, settings["resolution"])

@@ -43,12 +43,13 @@ _LAZY = {
     "GERBSInterpolator": "scattered",
     "cover_report": "scattered",
     # polygon-mesh blending surfaces (DESIGN section 5)
-    "MeshTopology": "mesh_topology",
-    "validate_geometry": "mesh_topology",
-    "Lattice": "tessellation",
-    "output_counts": "tessellation",
-    "BlendingSurface": "mesh_surface",
-    "Stencil": "stencil",
+    "MeshTopology": "mesh",
+    "validate_geometry": "mesh",
+    "Lattice": "mesh",
+    "output_counts": "mesh",
+    "BlendingSurface": "mesh",
+    "FairnessRule": "mesh",
+    "Stencil": "mesh",
 }
 
 __all__ = sorted(

@@ -61,7 +61,8 @@ class InvalidMeshError(GERBSValueError):
     ``problem`` is a short machine-readable tag, one of ``"non_manifold_edge"``,
     ``"inconsistent_orientation"``, ``"non_manifold_vertex"``, ``"degenerate_face"``, ``"duplicate_face"``,
     ``"repeated_index"``, ``"index_out_of_range"``, ``"unused_vertex"``,
-    ``"non_finite"``, ``"empty"``, ``"zero_length_edge"``, ``"bad_shape"``;
+    ``"non_finite"``, ``"empty"``, ``"outlier_vertex"``, ``"zero_length_edge"``,
+    ``"bad_shape"``;
     ``element`` says what ``indices`` count (``"vertex"``, ``"edge"``, ``"face"``).
     Edge problems (non-manifold, inconsistent orientation, zero length) report
     the edges' end points with ``element="vertex"``, since the caller's edge

@@ -76,8 +76,8 @@ def subsurf_count(bpy, obj, level):
 
 def closest_resolution(obj, target):
     from blender_addon import mesh_io
-    from gerbs_core.mesh_topology import MeshTopology
-    from gerbs_core.tessellation import output_counts
+    from gerbs_core.mesh.topology import MeshTopology
+    from gerbs_core.mesh.lattice import output_counts
 
     offsets, corners = mesh_io.read_topology(obj.data)
     topo = MeshTopology(mesh_io.faces_from_csr(offsets, corners), len(obj.data.vertices))
@@ -134,7 +134,7 @@ def bench_pair(bpy, obj, level, repeats):
         api.remove(obj)
         evaluated_positions(bpy, obj)
 
-    from gerbs_core.charts import clear_envelope_cache
+    from gerbs_core.mesh.cover import clear_envelope_cache
 
     def timed(build, clear, cold=False):
         clear()

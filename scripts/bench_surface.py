@@ -33,8 +33,8 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from gerbs_core.datasets import primitives as P  # noqa: E402
-from gerbs_core.charts import clear_envelope_cache  # noqa: E402
-from gerbs_core.mesh_surface import BlendingSurface  # noqa: E402
+from gerbs_core.mesh.cover import clear_envelope_cache  # noqa: E402
+from gerbs_core.mesh.surface import BlendingSurface  # noqa: E402
 
 
 def median_time(fn, repeats):
@@ -80,7 +80,7 @@ def gerbs_case(V, F, r, repeats, subsurf_build=None):
     cold()
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    return dict(points=st.matrix.shape[0], build=tb, warm=tw, update=tu, mem=peak / 1e6,
+    return dict(points=st.shape[0], build=tb, warm=tw, update=tu, mem=peak / 1e6,
                 nnz=st.nnz_per_row, eps0=s.last_eps0,
                 ss_build=statistics.median(tss) if tss else None)
 
@@ -135,7 +135,7 @@ def franke_table():
         t = time.perf_counter()
         emax, erms = franke_errors(n)
         rows.append((n * n, 1.0 / (n - 1), emax, erms, time.perf_counter() - t))
-    print("\nFranke F1, degree 2, metric mode on flat jittered Delaunay (resolution 4)")
+    print("\nFranke F1 on flat jittered Delaunay (resolution 4)")
     print(f"{'N':>6} {'h':>8} {'max err':>10} {'order':>6} {'rms err':>10} {'order':>6} "
           f"{'time s':>7}")
     prev = None

@@ -3,7 +3,7 @@
 
     .venv/bin/python scripts/gerbs_surface.py        # bundled sample -> out/suzanne_gerbs.glb
     .venv/bin/python scripts/gerbs_surface.py examples/suzanne.obj -o out.glb
-    .venv/bin/python scripts/gerbs_surface.py in.ply -o out.obj --resolution 6 --degree 3
+    .venv/bin/python scripts/gerbs_surface.py in.ply -o out.obj --resolution 6
 
 Reads OBJ, glTF (.gltf/.glb), PLY or STL with Blender's own importers, adds the
 GERBS Blending Surface modifier to every imported mesh (``blender_addon.api``),
@@ -56,9 +56,7 @@ def parse_args(argv):
                         "current directory)")
     p.add_argument("--resolution", type=int, default=4,
                    help="segments per mesh edge, 1..64 (default 4)")
-    p.add_argument("--degree", type=int, default=2, help="local polynomial degree 0..3 (default 2)")
     p.add_argument("--kernel", default="erbs", choices=["erbs", "bfbs", "logistic", "affine"])
-    p.add_argument("--mode", default="regular", choices=["regular", "metric"])
     p.add_argument("--boundary", default="keep", choices=["keep", "straighten"])
     for name in ("alpha", "beta", "gamma", "lam", "sigma"):
         p.add_argument(f"--{name}", type=float, default=None, help=f"ERBS parameter {name}")
@@ -82,8 +80,7 @@ def settings_from(args) -> dict:
     """The surface settings, checked by the add-on's one validator."""
     from blender_addon import settings as settings_mod
 
-    values = dict(resolution=args.resolution, degree=args.degree, kernel=args.kernel,
-                  mode=args.mode, boundary=args.boundary)
+    values = dict(resolution=args.resolution, kernel=args.kernel, boundary=args.boundary)
     for name in ("alpha", "beta", "gamma", "lam", "sigma", "bfbs_left", "bfbs_right"):
         if getattr(args, name) is not None:
             values[name] = getattr(args, name)

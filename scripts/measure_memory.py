@@ -40,7 +40,7 @@ def _mesh(name):
 
 
 def _resolution_for(topology, points: int) -> int:
-    from gerbs_core.tessellation import output_counts
+    from gerbs_core.mesh.lattice import output_counts
 
     r = 1
     while output_counts(topology, r)[0] < points:
@@ -72,13 +72,13 @@ def child(mesh: str, points: int, stage: str, trace: bool, budget: float) -> dic
     import numpy as np
 
     from gerbs_core import BlendingSurface
-    from gerbs_core.tessellation import output_counts
+    from gerbs_core.mesh.lattice import output_counts
 
     X, faces = _mesh(mesh)
-    surface = BlendingSurface(X, faces, degree=2, memory_budget=budget)
+    surface = BlendingSurface(X, faces, memory_budget=budget)
     r = _resolution_for(surface.topology, points)
     P, T = output_counts(surface.topology, r)
-    est = guard_estimate(X, faces, r, degree=2)
+    est = guard_estimate(X, faces, r)
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
     with open("/proc/self/statm") as f:
         cur0 = int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")

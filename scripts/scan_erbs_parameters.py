@@ -4,7 +4,7 @@
 
 For every (alpha, beta, gamma, lam, sigma) of the grid: ``refused`` if ERBS(...)
 raises InvalidParameterError (it cannot be tabulated, docs/robustness.md);
-``ok`` if the kernel is finite and monotone on 2049 points and the degree-2
+``ok`` if the kernel is finite and monotone on 2049 points and the
 surface of the mixed mesh (all face sizes 3..6) at resolution 2 is finite with
 eps0 > 0; ``holes`` if that surface is not finite or eps0 = 0 (the kernel's
 1 - F(t) underflows long before t = 1); anything else is printed as a failure.
@@ -38,7 +38,7 @@ def classify(params, X, faces, grid):
     d = kernel.cdf_derivs(grid[grid != params["lam"]], 1)
     if not (np.all(np.isfinite(d)) and np.all(np.diff(d[0]) >= -1e-14) and np.all(d[1] >= 0)):
         return "kernel-bad"
-    surface = BlendingSurface(X, faces, degree=2, kernel=kernel)
+    surface = BlendingSurface(X, faces, kernel=kernel)
     P, _, N = surface.tessellate(2)
     if not (np.all(np.isfinite(P)) and np.all(np.isfinite(N))) or not surface.eps0 > 0:
         return "holes"

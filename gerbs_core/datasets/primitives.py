@@ -17,7 +17,7 @@ from ..errors import InvalidParameterError
 from .obj import read_obj
 
 __all__ = ["icosphere", "uv_sphere", "grid", "mixed_mesh", "delaunay_patch", "jittered_patch", "suzanne",
-           "quad_patch", "ngon_ring", "fan", "SUZANNE_PATH"]
+           "quad_patch", "ngon_ring", "fan", "cube", "cylinder", "cone", "torus", "SUZANNE_PATH"]
 
 SUZANNE_PATH = Path(__file__).resolve().parents[2] / "examples" / "suzanne.obj"
 
@@ -286,6 +286,51 @@ def fan(k: int = 6, height: float = 0.0, closed: bool = False):
     v = np.concatenate([[[0.0, 0.0, h]], rim, [[0.0, 0.0, -h]]])
     bottom = [(k + 1, 1 + (i + 1) % k, 1 + i) for i in range(k)]
     return v, top + bottom
+
+
+def cube(size: float = 2.0):
+    """Blender's default Cube: 8 vertices at +-size/2, 6 quads."""
+    h = 0.5 * float(size)
+    V = np.array([(x, y, z) for x in (-h, h) for y in (-h, h) for z in (-h, h)])
+    F = np.array([[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4],
+                  [1, 5, 7, 3]], dtype=np.int64)
+    return V, F
+
+
+def _ring(n: int, radius: float, z: float):
+    t = 2 * np.pi * np.arange(n) / n
+    return np.stack([radius * np.cos(t), radius * np.sin(t), np.full(n, float(z))], 1)
+
+
+def cylinder(n: int = 32, radius: float = 1.0, depth: float = 2.0):
+    """Blender's default Cylinder: n side quads and two n-gon caps (no cap centres)."""
+    n = _check_int("n", n, 3)
+    V = np.concatenate([_ring(n, radius, -0.5 * depth), _ring(n, radius, 0.5 * depth)])
+    F = [(i, (i + 1) % n, n + (i + 1) % n, n + i) for i in range(n)]
+    F += [tuple(range(n - 1, -1, -1)), tuple(range(n, 2 * n))]
+    return V, F
+
+
+def cone(n: int = 32, radius: float = 1.0, depth: float = 2.0):
+    """Blender's default Cone: n side triangles to the apex and an n-gon base."""
+    n = _check_int("n", n, 3)
+    V = np.concatenate([_ring(n, radius, -0.5 * depth), [[0.0, 0.0, 0.5 * depth]]])
+    F = [(i, (i + 1) % n, n) for i in range(n)] + [tuple(range(n - 1, -1, -1))]
+    return V, F
+
+
+def torus(n_major: int = 24, n_minor: int = 16, major: float = 1.0, minor: float = 0.4):
+    """A quad torus with its vertices exactly on the torus (major radius R, minor r)."""
+    n_major, n_minor = _check_int("n_major", n_major, 3), _check_int("n_minor", n_minor, 3)
+    u = 2 * np.pi * np.arange(n_major) / n_major
+    v = 2 * np.pi * np.arange(n_minor) / n_minor
+    U, W = np.meshgrid(u, v, indexing="ij")
+    rho = major + minor * np.cos(W)
+    V = np.stack([rho * np.cos(U), rho * np.sin(U), minor * np.sin(W)], -1).reshape(-1, 3)
+    idx = lambda i, j: (i % n_major) * n_minor + (j % n_minor)  # noqa: E731
+    F = np.array([[idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)]
+                  for i in range(n_major) for j in range(n_minor)], dtype=np.int64)
+    return V, F
 
 
 def suzanne():

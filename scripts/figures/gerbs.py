@@ -6,8 +6,8 @@ import numpy as np
 
 def output_count(faces, n_vertices: int, resolution: int) -> int:
     """Number of tessellation samples (points) at `resolution` (exact, from the lattice)."""
-    from gerbs_core.mesh_topology import MeshTopology
-    from gerbs_core.tessellation import output_counts
+    from gerbs_core.mesh.topology import MeshTopology
+    from gerbs_core.mesh.lattice import output_counts
 
     return output_counts(MeshTopology(faces, n_vertices), int(resolution))[0]
 
@@ -21,7 +21,7 @@ def blending_surface(vertices, faces, *, kinked: bool = False, **options):
     rays from each vertex to its star's corners (the mesh edges, and the
     diagonals of quads and n-gons).
     """
-    from gerbs_core.mesh_surface import BlendingSurface
+    from gerbs_core.mesh.surface import BlendingSurface
 
     return BlendingSurface(np.asarray(vertices, dtype=np.float64), faces,
                            exact_gauge=bool(kinked), **options)
@@ -50,7 +50,7 @@ def tessellate_split(vertices, faces, resolution: int, *, kinked: bool = False, 
     lat = surf.lattice(int(resolution))
     if not np.array_equal(lat.triangles, tris):
         raise RuntimeError("tessellate() no longer returns the lattice's triangles")
-    x = lat.map_to_polygon(surf.shapes.corners, local=True)
+    x = lat.map_to_polygon(surf.layouts.corners, local=True)
     dS = surf.evaluate_all(lat.local_face, x, nu=1)[1]
     n = np.cross(dS[..., 0], dS[..., 1])
     length = np.linalg.norm(n, axis=1)

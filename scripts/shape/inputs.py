@@ -18,7 +18,7 @@ import numpy as np
 
 from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError
-from gerbs_core.mesh_topology import MeshTopology, validate_geometry
+from gerbs_core.mesh import MeshTopology, validate_geometry
 from gerbs_core.datasets.obj import read_obj
 from gerbs_core.testing import HeightField, Torus, UnitSphere
 

@@ -26,11 +26,15 @@ import numpy as np
 import gerbs_core
 from gerbs_core.testing import mean_curvature_from_derivatives
 
-# GERBS configurations measured side by side (--variant a,b,c): name -> options
+# GERBS configurations measured side by side (--variant a,b,c): name -> options.
+# The default and the designs it was chosen against (docs/design.md): each leaves out
+# one ingredient of the fair-shape rule (gerbs_core.mesh.agreement).
 VARIANTS = {
     "default": {},
-    "metric": {"mode": "metric"},
-    "metric-d3": {"mode": "metric", "degree": 3},
+    "degree-2": {"fairness": gerbs_core.FairnessRule(candidates=((2, 1),), sweeps=0)},
+    "choice-only": {"fairness": gerbs_core.FairnessRule(sweeps=0)},
+    "no-tension": {"fairness": gerbs_core.FairnessRule(lam=0.0)},
+    "fixed-degree-2": {"fairness": gerbs_core.FairnessRule(candidates=((2, 1),))},
 }
 
 
@@ -47,7 +51,7 @@ def gerbs_samples(V, F, r, exact=True, **options):
         P, T, N = s.tessellate(r)
         return {"points": P, "triangles": np.asarray(T), "normals": N, "H_exact": None}
     lat = s.lattice(r)
-    x = lat.map_to_polygon(s.shapes.corners)
+    x = lat.map_to_polygon(s.layouts.corners)
     S, dS, d2S = s.evaluate_all(lat.face, x, nu=2)  # dS (P,3,2), d2S (P,3,2,2), face-local
     # at a mesh vertex the face coordinates are singular (the angle-scaled chart is
     # not differentiable at its centre); there S = l_v o zeta_v, so the derivatives

@@ -91,7 +91,7 @@ def modifier_input(obj) -> np.ndarray:
 def fresh_surface(X, offsets, corners, resolution, **kw) -> np.ndarray:
     """The core's surface points (P, 3) built from scratch (no Blender involved)."""
     from blender_addon.mesh_io import faces_from_csr
-    from gerbs_core.mesh_surface import BlendingSurface
+    from gerbs_core.mesh.surface import BlendingSurface
 
     faces = faces_from_csr(np.asarray(offsets), np.asarray(corners))
     return BlendingSurface(np.asarray(X, dtype=np.float64), faces, **kw).tessellate(resolution)[0]

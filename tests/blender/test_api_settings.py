@@ -11,10 +11,10 @@ def test_menu_settings_accept_operator_spelling(blender):
     from blender_addon import api
 
     obj = make_object("icosphere")
-    api.add_surface(obj, resolution=2, kernel="LOGISTIC", mode="Regular", boundary="keep")
+    api.add_surface(obj, resolution=2, kernel="LOGISTIC", boundary="Keep")
     settings = api.get_settings(obj)
     assert settings["kernel"] == "logistic"
-    assert settings["mode"] == "regular"
+    assert settings["boundary"] == "keep"
 
 
 def test_unknown_menu_value_is_named(blender):
@@ -48,8 +48,7 @@ BAD_SETTINGS = [
     ("resolution", 2.5, r"resolution: must be an integer, got 2.5"),
     ("resolution", "4", r"resolution: must be an integer, got '4'"),
     ("resolution", True, r"resolution: must be an integer, got True"),
-    ("degree", 5, r"degree: must be in \[0, 3\], got 5"),
-    ("degree", True, r"degree: must be an integer, got True"),
+    ("bfbs_right", True, r"bfbs_right: must be an integer, got True"),
     ("alpha", float("inf"), r"alpha: must be finite"),
     ("lam", 1.5, r"lam: must be finite and in \[0, 1\]"),
     ("sigma", "1", r"sigma: must be a real number"),
@@ -72,7 +71,7 @@ def test_set_settings_refuses_bad_values_at_set_time_and_changes_nothing(blender
     api.add_surface(obj, resolution=2)
     before = api.get_settings(obj)
     with pytest.raises(InvalidParameterError, match=match):
-        api.set_settings(obj, **{"degree": 3, key: value})  # degree=3 alone would be fine
+        api.set_settings(obj, **{"bfbs_left": 3, key: value})  # bfbs_left=3 alone would be fine
     assert api.get_settings(obj) == before
     with pytest.raises(InvalidParameterError, match=match):
         api.add_surface(obj, **{key: value})
@@ -80,7 +79,7 @@ def test_set_settings_refuses_bad_values_at_set_time_and_changes_nothing(blender
 
 
 @pytest.mark.parametrize("key,value,match", [  # (the operator's property types let these through)
-    b for b in BAD_SETTINGS if (b[0] in ("resolution", "degree") and type(b[1]) is int)
+    b for b in BAD_SETTINGS if (b[0] in ("resolution", "bfbs_left") and type(b[1]) is int)
     or (b[0] in ("alpha", "lam") and type(b[1]) is float)])
 def test_operator_refuses_bad_values_with_one_message(blender, key, value, match):
     import bpy
@@ -103,11 +102,11 @@ def test_settings_read_back_as_set(blender):
     assert got["alpha"] == float(np.float32(0.01)) and got["gamma"] == 100.0
     api.set_settings(obj, alpha=1.1)
     assert api.get_settings(obj)["alpha"] == float(np.float32(1.1))
-    api.set_settings(obj, kernel="BFBS", bfbs_left=3, degree=1, lam=0.25, memory_budget=5e8,
-                     use_normals=True, mode="metric")
+    api.set_settings(obj, kernel="BFBS", bfbs_left=3, bfbs_right=1, lam=0.25, memory_budget=5e8,
+                     use_normals=True, boundary="straighten")
     got = api.get_settings(obj)
-    assert (got["kernel"], got["bfbs_left"], got["degree"], got["lam"], got["use_normals"],
-            got["mode"]) == ("bfbs", 3, 1, 0.25, True, "metric")
+    assert (got["kernel"], got["bfbs_left"], got["bfbs_right"], got["lam"], got["use_normals"],
+            got["boundary"]) == ("bfbs", 3, 1, 0.25, True, "straighten")
     assert got["memory_budget"] == pytest.approx(5e8)
 
 

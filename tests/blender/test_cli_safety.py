@@ -140,8 +140,8 @@ def test_a_micrometre_icosphere_keeps_every_vertex(blender, tmp_path, ext):
     surface has the count of the mesh as stored. (Not OBJ: Blender's OBJ exporter
     writes 6 decimals, so at this scale the file itself has zero-length edges.)"""
     from blender_addon.mesh_io import faces_from_csr, read_topology
-    from gerbs_core.mesh_topology import MeshTopology
-    from gerbs_core.tessellation import output_counts
+    from gerbs_core.mesh.topology import MeshTopology
+    from gerbs_core.mesh.lattice import output_counts
 
     bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=5, radius=1e-6)
     obj = bpy.context.active_object
@@ -180,9 +180,9 @@ def test_suzanne_re_exported_by_blender_is_accepted(blender, tmp_path, ext):
 
 
 def _suzanne_surface_count(r):
-    from gerbs_core.mesh_topology import MeshTopology
+    from gerbs_core.mesh.topology import MeshTopology
     from gerbs_core.datasets.primitives import suzanne
-    from gerbs_core.tessellation import output_counts
+    from gerbs_core.mesh.lattice import output_counts
 
     X, F = suzanne()
     return output_counts(MeshTopology(F, len(X)), r)[0]
@@ -213,7 +213,7 @@ NON_MANIFOLD = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\n
     ("garbage.ply", ["cannot read", "PLY"]), ("garbage.stl", ["no faces"]),
     ("truncated.glb", ["glTF"]),
     ("bad extension", ["input must be one of"]), ("bad output extension", ["output must be"]),
-    ("--resolution 0", ["--resolution", "[1, 64]"]), ("--degree 5", ["--degree"]),
+    ("--resolution 0", ["--resolution", "[1, 64]"]), ("--bfbs-left 99", ["--bfbs-left", "[0, 16]"]),
     ("--resolution x", ["invalid int value"]), ("--alpha nan", ["--alpha", "finite"]),
     ("--memory-budget 0", ["--memory-budget"]), ("--merge-distance -1", ["--merge-distance"]),
     ("--kernel gauss", ["--kernel"]), ("non-manifold", ["non_manifold_edge"]),

@@ -73,8 +73,8 @@ def test_bad_settings_are_refused(blender):
     obj = make_object("grid")
     with pytest.raises(ValueError, match="colour: unknown GERBS setting"):
         api.add_surface(obj, resolution=2, colour="red")
-    with pytest.raises(ValueError, match="mode"):
-        api.add_surface(obj, mode="bogus")
+    with pytest.raises(ValueError, match="boundary"):
+        api.add_surface(obj, boundary="bogus")
     assert len(obj.modifiers) == 0
 
 

@@ -42,15 +42,14 @@ def test_settings_are_modifier_inputs_and_change_the_surface(blender):
     from blender_addon import api, engine
 
     obj = make_object("icosphere")
-    mod = api.add_surface(obj, resolution=2, kernel="logistic", degree=1)
+    mod = api.add_surface(obj, resolution=2, kernel="logistic")
     assert api.get_settings(obj)["kernel"] == "logistic"
-    assert api.get_settings(obj)["degree"] == 1
     P2 = evaluated(obj)
     api.set_settings(obj, resolution=4)
     P4 = evaluated(obj)  # the handler rebuilds inside the depsgraph update
     assert len(P4) > len(P2)
     st = engine.get_state(obj, mod)
-    api.set_settings(obj, degree=2)
+    api.set_settings(obj, kernel="bfbs", bfbs_left=1, bfbs_right=1)
     P4b = evaluated(obj)
     assert len(P4b) == len(P4) and np.abs(P4b - P4).max() > 1e-4
     assert engine.get_state(obj, mod) is not st  # settings change -> rebuild

@@ -14,7 +14,7 @@ def test_save_reload_keeps_settings_and_surface(blender, tmp_path):
     from blender_addon import api
 
     obj = make_object("suzanne")
-    api.add_surface(obj, resolution=3, kernel="logistic", degree=3, boundary="straighten")
+    api.add_surface(obj, resolution=3, kernel="logistic", bfbs_left=3, boundary="straighten")
     name, P = obj.name, evaluated(obj)
     path = tmp_path / "gerbs.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(path))
@@ -22,7 +22,7 @@ def test_save_reload_keeps_settings_and_surface(blender, tmp_path):
     bpy.ops.wm.open_mainfile(filepath=str(path))
     obj = bpy.data.objects[name]
     settings = api.get_settings(obj)
-    assert (settings["resolution"], settings["kernel"], settings["degree"], settings["boundary"]) \
+    assert (settings["resolution"], settings["kernel"], settings["bfbs_left"], settings["boundary"]) \
         == (3, "logistic", 3, "straighten")
     assert np.abs(evaluated(obj) - P).max() == 0.0
     # caches were rebuilt on load: live update works
@@ -224,11 +224,11 @@ def test_modifiers_of_an_older_group_version_move_to_the_current_group_on_load(b
     from blender_addon import geometry_nodes as gn
 
     obj = make_object("icosphere")
-    mod = api.add_surface(obj, resolution=3, kernel="logistic", degree=1)
+    mod = api.add_surface(obj, resolution=3, kernel="logistic", bfbs_left=1)
     old = mod.node_group.copy()
     old[ids.GROUP_TAG] = ids.GROUP_VERSION - 1
     mod.node_group = old
-    for key, value in (("resolution", 3), ("kernel", "logistic"), ("degree", 1)):
+    for key, value in (("resolution", 3), ("kernel", "logistic"), ("bfbs_left", 1)):
         gn.write_settings(mod, **{key: value})
     name = obj.name
     path = tmp_path / "old.blend"
@@ -238,7 +238,7 @@ def test_modifiers_of_an_older_group_version_move_to_the_current_group_on_load(b
     mod = obj.modifiers[0]
     assert gn.is_current_group(mod.node_group)
     got = api.get_settings(obj)
-    assert (got["resolution"], got["kernel"], got["degree"]) == (3, "logistic", 1)
+    assert (got["resolution"], got["kernel"], got["bfbs_left"]) == (3, "logistic", 1)
     assert [g for g in bpy.data.node_groups if gn.is_gerbs_group(g)] == [mod.node_group]
     P = evaluated(obj)
     assert len(P) > len(obj.data.vertices) and np.abs(P[:42] - positions(obj.data)).max() <= 1e-6

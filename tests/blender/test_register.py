@@ -42,7 +42,7 @@ def test_menu_entry_adds_modifier_via_operator(blender):
     mod = obj.modifiers[-1]
     assert mod.type == "NODES" and mod.name == "GERBS Blending Surface"
     names = {item.name for item in mod.node_group.interface.items_tree}
-    for label in ("Kernel", "Alpha", "Lambda", "Degree", "Resolution", "Face Shape", "Boundary",
+    for label in ("Kernel", "Alpha", "Lambda", "Resolution", "Rest Shape", "Boundary",
                   "Use Custom Normals"):
         assert label in names
 

@@ -42,16 +42,16 @@ def test_main_job_on_the_bundled_sample(tmp_path):
 
 def test_main_job_obj_output_is_the_surface(blender, tmp_path):
     out = run([ROOT / "scripts" / "gerbs_surface.py", ROOT / "examples" / "suzanne.obj",
-               "-o", tmp_path / "s.obj", "--resolution", "2", "--degree", "3", "--quiet"],
+               "-o", tmp_path / "s.obj", "--resolution", "2", "--boundary", "straighten", "--quiet"],
               cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     bpy.ops.wm.obj_import(filepath=str(tmp_path / "s.obj"))
     (obj,) = bpy.context.selected_objects
     # expected from the core directly (no Blender in the loop)
-    from gerbs_core.mesh_surface import BlendingSurface
+    from gerbs_core.mesh.surface import BlendingSurface
     from gerbs_core.datasets.primitives import suzanne
     X, F = suzanne()
-    P = BlendingSurface(X, F, degree=3).tessellate(2)[0]
+    P = BlendingSurface(X, F, boundary="straighten").tessellate(2)[0]
     Q = positions(obj.data)
     assert Q.shape == P.shape and np.abs(Q - P).max() <= 1e-5
 
@@ -95,7 +95,7 @@ def test_extension_zip_validates_and_installs(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "points 42" in out.stdout  # Blender's subdivisions=1: icosahedron, 12 + 30 edges * (2-1)
     site = tmp_path / "user" / "extensions" / ".local" / "lib" / "python3.11" / "site-packages"
-    assert (site / "gerbs_core" / "mesh_surface.py").is_file()  # the wheel was installed
+    assert (site / "gerbs_core" / "mesh" / "surface.py").is_file()  # the wheel was installed
 
 
 def test_build_extension_lists_given_wheels_and_skips_numpy(tmp_path):

@@ -3,17 +3,17 @@ import numpy as np
 import pytest
 
 from gerbs_core.datasets import primitives as P
-from gerbs_core.charts import star_boundary, vertex_charts
 from gerbs_core.errors import InvalidParameterError
-from gerbs_core.face_shapes import face_shapes
-from gerbs_core.mesh_topology import MeshTopology
+from gerbs_core.mesh.charts import vertex_charts
+from gerbs_core.mesh.cover import star_boundary
+from gerbs_core.mesh.layout import face_layouts
+from gerbs_core.mesh.topology import MeshTopology
 
 
-def _charts(V, F, mode="metric", rule="keep"):
+def _charts(V, F, rule="keep"):
     topo = MeshTopology(F, len(V))
-    sh = face_shapes(topo.face_offsets, topo.face_vertices, mode, V)
-    ch = vertex_charts(topo.face_offsets, topo.face_vertices, sh.corners, sh.angles,
-                       topo.star_offsets, topo.star_corners, topo.vertex_is_boundary, rule)
+    sh = face_layouts(topo, V)
+    ch = vertex_charts(topo, sh.corners, sh.angles, rule)
     return topo, sh, ch
 
 
@@ -22,10 +22,9 @@ MESHES = {"ico": P.icosphere(1), "uv": P.uv_sphere(8, 5), "mixed": P.mixed_mesh(
 
 
 @pytest.mark.parametrize("name", sorted(MESHES))
-@pytest.mark.parametrize("mode", ["regular", "metric"])
-def test_spokes_agree_from_both_faces_and_stars_close(name, mode):
+def test_spokes_agree_from_both_faces_and_stars_close(name):
     V, F = MESHES[name]
-    topo, sh, ch = _charts(V, F, mode)
+    topo, sh, ch = _charts(V, F)
     fv, nx, tw = topo.face_vertices, topo.corner_next, topo.halfedge_twin
     # the spoke v -> next(c) seen from face of c and from the twin face (corner next(twin))
     c = np.flatnonzero(tw >= 0)
@@ -40,20 +39,20 @@ def test_spokes_agree_from_both_faces_and_stars_close(name, mode):
 
 def test_boundary_rules():
     V, F = P.mixed_mesh(bend=0.4)
-    topo, sh, keep = _charts(V, F, "metric", "keep")
-    _, _, straight = _charts(V, F, "metric", "straighten")
+    topo, sh, keep = _charts(V, F, "keep")
+    _, _, straight = _charts(V, F, "straighten")
     b = topo.vertex_is_boundary
     small = b & (keep.span <= 1.5 * np.pi)
     assert small.any() and np.all(keep.scale[small] == 1.0)
     assert np.all(keep.scale[b] * keep.span[b] <= 1.5 * np.pi + 1e-12)
     assert np.abs(straight.scale[b] * straight.span[b] - np.pi).max() < 1e-13
     with pytest.raises(InvalidParameterError, match="boundary"):
-        _charts(V, F, "metric", "round")
+        _charts(V, F, "round")
 
 
 def test_flat_metric_keep_chart_is_isometric():
     V, F = P.delaunay_patch(40, 2)
-    topo, sh, ch = _charts(V, F, "metric", "keep")
+    topo, sh, ch = _charts(V, F, "keep")
     rng = np.random.default_rng(0)
     for v in range(len(V)):
         star = topo.star_corners[topo.star_offsets[v]:topo.star_offsets[v + 1]]
@@ -72,7 +71,7 @@ def test_flat_metric_keep_chart_is_isometric():
 
 def test_derivatives_match_finite_differences_and_inverse():
     V, F = P.mixed_mesh(bend=0.4)
-    topo, sh, ch = _charts(V, F, "regular")
+    topo, sh, ch = _charts(V, F)
     c = np.arange(topo.n_corners)
     f = topo.corner_face[c]
     ctr = np.add.reduceat(sh.corners, topo.face_offsets[:-1], 0) / topo.face_sizes[:, None]
@@ -95,7 +94,7 @@ def test_derivatives_match_finite_differences_and_inverse():
 
 def test_star_boundary_is_the_far_edges():
     V, F = P.uv_sphere(6, 4)
-    topo, sh, ch = _charts(V, F, "metric")
+    topo, sh, ch = _charts(V, F)
     th, r = star_boundary(topo, ch, sh.corners, 0)  # north pole: 6 triangles
     assert len(th) == 7 and np.isclose(th[-1] - th[0], ch.span[0])
     assert np.allclose(r, np.linalg.norm(V[1] - V[0]))

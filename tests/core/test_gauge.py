@@ -455,10 +455,10 @@ def test_mesh_envelopes_stay_inside_the_star_for_asymmetric_kernels(lam):
     a symmetric kernel; ERBS(lam=1) then gave rho~/rho up to 1.26 and missed the
     vertices by 0.27)."""
     from gerbs_core.datasets import primitives as P
-    from gerbs_core.mesh_surface import BlendingSurface
+    from gerbs_core.mesh.surface import BlendingSurface
     V, F = P.mixed_mesh(0.7)
-    s = BlendingSurface(V, F, kernel=ERBS(lam=lam), degree=0)
-    for e in s._envelopes:
+    s = BlendingSurface(V, F, kernel=ERBS(lam=lam))
+    for e in s.model.cover.envelopes:
         th = np.linspace(0.0, e.span, 20001)
         q = np.asarray(e(th)).reshape(-1) / e.exact_radius(th)
         assert q.max() <= e.shrink * (1 + 1e-12) and q.min() >= e.kappa * e.shrink * (1 - 1e-12)

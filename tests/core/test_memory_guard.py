@@ -19,7 +19,7 @@ import pytest
 from gerbs_core import BlendingSurface
 from gerbs_core.datasets import primitives
 from gerbs_core.errors import GERBSValueError, ResourceLimitError
-from gerbs_core.tessellation import output_counts
+from gerbs_core.mesh.lattice import output_counts
 
 SLACK = 32e6
 FACTOR = 8.0
@@ -52,7 +52,7 @@ def _peak(fn):
 @pytest.mark.parametrize("stage", ["stencil", "tessellate"])
 def test_estimate_is_an_honest_bound_of_the_measured_peak(mesh, resolution, stage):
     X, faces = primitives.suzanne() if mesh == "suzanne" else primitives.icosphere(3)
-    surface = BlendingSurface(X, faces, degree=2)
+    surface = BlendingSurface(X, faces)
     est = _estimate(surface, resolution)
     out, peak = _peak(lambda: getattr(surface, stage)(resolution))
     P, _ = output_counts(surface.topology, resolution)
@@ -65,7 +65,7 @@ def test_estimate_is_an_honest_bound_of_the_measured_peak(mesh, resolution, stag
 @pytest.mark.parametrize("stage", ["stencil", "tessellate", "lattice"])
 def test_over_budget_is_refused_before_allocating(stage):
     X, faces = primitives.suzanne()
-    surface = BlendingSurface(X, faces, degree=2, memory_budget=50e6)
+    surface = BlendingSurface(X, faces, memory_budget=50e6)
     r = 2000  # ~2e9 points: would need terabytes
     with pytest.raises(ResourceLimitError) as info:
         _peak(lambda: getattr(surface, stage)(r))
@@ -87,12 +87,12 @@ def test_over_budget_is_refused_before_allocating(stage):
 def test_budget_is_configurable_per_surface():
     X, faces = primitives.suzanne()
     r = 8
-    est = _estimate(BlendingSurface(X, faces, degree=2), r)
-    below = BlendingSurface(X, faces, degree=2, memory_budget=0.5 * est)
+    est = _estimate(BlendingSurface(X, faces), r)
+    below = BlendingSurface(X, faces, memory_budget=0.5 * est)
     with pytest.raises(ResourceLimitError, match=f"estimated memory {est / 1e6:.0f} MB"):
         below.stencil(r)
-    above = BlendingSurface(X, faces, degree=2, memory_budget=2.0 * est)
-    assert above.stencil(r).matrix.shape[0] == output_counts(above.topology, r)[0]
+    above = BlendingSurface(X, faces, memory_budget=2.0 * est)
+    assert above.stencil(r).shape[0] == output_counts(above.topology, r)[0]
 
 
 def test_default_budget_refuses_absurd_resolutions_with_python_int_counts():

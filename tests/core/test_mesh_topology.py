@@ -5,7 +5,7 @@ import pytest
 from gerbs_core import MeshTopology
 from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError
-from gerbs_core.mesh_topology import validate_geometry
+from gerbs_core.mesh.validation import validate_geometry
 
 
 def _raises(problem, faces, n_vertices=None):

@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 
 from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError
-from gerbs_core.mesh_topology import MeshTopology, validate_geometry
+from gerbs_core.mesh import MeshTopology, validate_geometry
 
 SETTINGS = dict(deadline=None, derandomize=True, database=None,
                 suppress_health_check=[HealthCheck.too_slow])

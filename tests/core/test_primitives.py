@@ -4,7 +4,7 @@ import pytest
 
 from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError, InvalidParameterError
-from gerbs_core.mesh_topology import MeshTopology, validate_geometry
+from gerbs_core.mesh import MeshTopology, validate_geometry
 from gerbs_core.datasets.obj import parse_obj, read_obj, write_obj
 
 

@@ -1,19 +1,17 @@
-"""Stencils W: W @ X equals direct evaluation; locality; regular mode is topology-only.
+"""Stencils: the output as a fixed linear map of the positions; locality; partial updates.
 
-Locality implied by the construction (stated in gerbs_core.stencil): a sample of
-face f depends on the vertices {u} + N_u of f's corners u, N_u the fit data of
-l_u = the corners of u's star faces plus up to two layers of faces beyond them.
-So moving vertex w changes exactly the samples of the faces in the stars of the
-vertices u with w in {u} + N_u. On a triangle mesh N_u lies in the 3-ring of u
-(star corners: 1-ring; each extra face layer adds at most one ring), hence only
-samples of faces with a vertex in the 3-ring of w can change.
+Locality implied by the construction (gerbs_core.mesh.stencil): a sample of face f
+depends on the positions of f's corners u and on those the coefficients of u depend
+on (the operator's row block of u). So moving vertex w changes exactly the samples of
+the faces having a corner u with u == w or a non-zero in column w of u's rows.
 """
 import numpy as np
 import pytest
 
 from gerbs_core.datasets import primitives as P
-from gerbs_core.mesh_surface import BlendingSurface
-from gerbs_core.tessellation import Lattice
+from gerbs_core.mesh.agreement import MMAX
+from gerbs_core.mesh.lattice import Lattice
+from gerbs_core.mesh.surface import BlendingSurface
 
 MESHES = {
     "tri_grid": lambda: P.grid(4, 4, kind="tri"),
@@ -26,38 +24,39 @@ MESHES = {
 
 
 @pytest.mark.parametrize("name", sorted(MESHES))
-@pytest.mark.parametrize("mode", ["regular", "metric"])
-def test_stencil_equals_direct_evaluation(name, mode):
+def test_stencil_equals_direct_evaluation(name):
     V, F = MESHES[name]()
-    s = BlendingSurface(V, F, mode=mode)
+    s = BlendingSurface(V, F)
     st = s.stencil(4)
     pts, tris, _ = s.tessellate(4)
-    assert st.matrix.shape == (len(pts), len(V))
+    W = st.matrix()
+    assert W.shape == st.shape == (len(pts), len(V))
     assert np.abs(st.apply(V) - pts).max() <= 1e-12
+    assert np.abs(W @ V - pts).max() <= 1e-12
     assert np.array_equal(st.triangles, tris)
     assert np.array_equal(st.vertex_samples, np.arange(len(V)))
     # rows are affine combinations (constants are reproduced)
-    assert np.abs(np.asarray(st.matrix.sum(axis=1)).ravel() - 1).max() <= 1e-12
-    # new positions: W (bound charts) @ Y == direct evaluation with the same charts
+    assert np.abs(np.asarray(W.sum(axis=1)).ravel() - 1).max() <= 1e-12
+    # new positions: the stencil (bound to the rest shape) == direct evaluation
     Y = V + np.random.default_rng(1).normal(scale=0.05, size=V.shape)
     assert np.abs(st.apply(Y) - s.with_positions(Y).tessellate(4)[0]).max() <= 1e-12
 
 
-def test_regular_stencil_depends_only_on_topology():
-    V, F = P.mixed_mesh()
+def test_stencil_depends_on_the_rest_shape_not_on_the_positions():
+    V, F = P.mixed_mesh(bend=0.3)
     Y = V + np.random.default_rng(2).normal(scale=0.1, size=V.shape)
-    A = BlendingSurface(V, F).stencil(3).matrix
-    B = BlendingSurface(Y, F).stencil(3).matrix
-    assert (A != B).nnz == 0
-    C = BlendingSurface(Y, F, mode="metric").stencil(3).matrix
-    assert (A != C).nnz > 0  # metric mode does depend on the rest lengths
+    s = BlendingSurface(V, F)
+    A = s.stencil(3).matrix()
+    assert (A != s.with_positions(Y).stencil(3).matrix()).nnz == 0
+    assert (A != BlendingSurface(Y, F, rest_positions=V).stencil(3).matrix()).nnz == 0
+    assert (A != BlendingSurface(Y, F).stencil(3).matrix()).nnz > 0  # another rest shape
 
 
 def _affected_faces(s, w):
-    fits, topo = s.fits, s.topology
-    us = [u for u in range(topo.n_vertices) if u == w or w in fits.ids[u]]
-    return np.unique(np.concatenate([topo.corner_face[topo.star_corners[
-        topo.star_offsets[u]:topo.star_offsets[u + 1]]] for u in us]))
+    op, topo = s.model.operator.tocsc(), s.topology
+    rows = op.indices[op.indptr[w]:op.indptr[w + 1]]
+    us = np.union1d(np.unique(rows // MMAX), [w])
+    return np.unique(topo.corner_face[np.isin(topo.face_vertices, us)])
 
 
 @pytest.mark.parametrize("name", ["icosphere", "mixed_bent", "quad_grid", "delaunay"])
@@ -67,8 +66,9 @@ def test_locality_exact(name):
     r = 3
     st = s.stencil(r)
     lat = Lattice(s.topology, r)
-    Wc = st.matrix.tocsc()
+    Wc = st.matrix().tocsc()
     topo = s.topology
+    base = s.tessellate(r)[0]
     for w in range(0, topo.n_vertices, 2):
         rows = Wc.indices[Wc.indptr[w]:Wc.indptr[w + 1]]
         allowed = np.isin(lat.face, _affected_faces(s, w))
@@ -76,13 +76,26 @@ def test_locality_exact(name):
         # moving w changes exactly within the allowed samples
         Y = V.copy()
         Y[w] += [0.03, -0.02, 0.05]
-        d = np.abs(s.with_positions(Y).tessellate(r)[0] - s.tessellate(r)[0]).max(axis=1)
+        d = np.abs(s.with_positions(Y).tessellate(r)[0] - base).max(axis=1)
         assert np.all(d[~allowed] == 0.0) and d[allowed].max() > 0
-        if name == "icosphere":  # topological bound on triangle meshes: the 3-ring
-            ring = topo.k_ring(w, 3, include_self=True)
-            fv_ok = np.zeros(topo.n_faces, dtype=bool)
-            np.logical_or.at(fv_ok, topo.corner_face, np.isin(topo.face_vertices, ring))
-            assert fv_ok[lat.face[d > 0]].all()
+        # the partial update gives the same points
+        pts = base.copy()
+        st.apply_moved(pts, np.array([w]), (Y - V)[[w]])
+        assert np.abs(pts - s.with_positions(Y).tessellate(r)[0]).max() <= 1e-12
+
+
+def test_support_is_a_few_rings():
+    # a coefficient depends on the data rings (2) plus one ring per coupling sweep (2);
+    # a sample on the corners of its face: moving w reaches the faces within 5 rings
+    V, F = P.icosphere(2)
+    s = BlendingSurface(V, F)
+    topo = s.topology
+    for w in (0, 17, 100):
+        ring = topo.k_ring(w, 5, include_self=True)
+        fv_ok = np.zeros(topo.n_faces, dtype=bool)
+        np.logical_or.at(fv_ok, topo.corner_face, np.isin(topo.face_vertices, ring))
+        affected = _affected_faces(s, w)
+        assert fv_ok[affected].all() and len(affected) < 0.6 * topo.n_faces
 
 
 def _hashed_edges(L):
@@ -105,7 +118,7 @@ def test_lattice_edges_equal_hashed_edges(name, r):
     V, F = {"suzanne": P.suzanne, "mixed": P.mixed_mesh, "uv_sphere": lambda: P.uv_sphere(8, 6),
             "delaunay": lambda: P.delaunay_patch(30, 3),
             "tri_grid": lambda: P.grid(4, 4, kind="tri")}[name]()
-    L = BlendingSurface(V, F).stencil(r).lattice
+    L = Lattice(BlendingSurface(V, F).topology, r)
     res = L.edges()
     if res is None:  # only quads at resolution 1 (a diagonal may be shared)
         assert r == 1 and np.any(L.topology.face_sizes == 4)
@@ -121,7 +134,7 @@ def test_lattice_edges_equal_hashed_edges(name, r):
 def test_lattice_edges_merge_the_repeats_at_an_interior_valence_2_vertex():
     # vertex 1 is interior with valence 2: both quads have it at corner 1, whose lattice
     # diagonal joins the same two edge samples in both faces
-    from gerbs_core.mesh_topology import MeshTopology
+    from gerbs_core.mesh.topology import MeshTopology
     L = Lattice(MeshTopology([[0, 1, 2, 3], [2, 1, 0, 4]], 5), 3)
     ev, ce = L.edges()
     want, corner_keys = _hashed_edges(L)
@@ -132,10 +145,13 @@ def test_lattice_edges_merge_the_repeats_at_an_interior_valence_2_vertex():
     assert np.array_equal(np.sort(got), want) and np.array_equal(got[ce], corner_keys)
 
 
-def test_stencil_rows_have_sorted_columns_and_no_stored_zeros_beyond_the_locality():
-    V, F = P.mixed_mesh(bend=0.5)
-    for mode in ("regular", "metric"):
-        W = BlendingSurface(V, F, mode=mode).stencil(4).matrix
-        rows = np.repeat(np.arange(W.shape[0]), np.diff(W.indptr))
-        same_row = rows[1:] == rows[:-1]
-        assert np.all(np.diff(W.indices)[same_row] > 0)  # strictly increasing per row
+def test_stencil_factors_are_canonical_csr_and_small():
+    V, F = P.suzanne()
+    st = BlendingSurface(V, F).stencil(4)
+    for M in (st.base, st.mono, st.operator):
+        assert M.has_canonical_format
+    # on a mesh larger than a few rings, the evaluation factors B + E hold fewer entries
+    # than the explicit product W (whose rows reach every vertex of the corners' supports)
+    W = st.matrix()
+    print("entries per row: B + E", (st.base.nnz + st.mono.nnz) / W.shape[0], "W", W.nnz / W.shape[0])
+    assert st.base.nnz + st.mono.nnz < W.nnz

@@ -1,15 +1,15 @@
-"""Convergence on Franke's F1 over flat Delaunay triangulations (metric mode, DESIGN 5).
+"""Convergence on Franke's F1 over flat Delaunay triangulations.
 
 Vertex data (x, y, F1(x, y)) over a jittered-grid Delaunay triangulation of the
-unit square with N = n^2 points; the flat layout is the rest geometry (metric
-mode, boundary keep), so S = (x, y, s(x, y)) and the error is |s - F1| at the
+unit square with N = n^2 points; the flat layout is the rest geometry (boundary
+keep), so S = (x, y, s(x, y)) and the error is |s - F1| at the
 tessellation samples. The full table up to N = 6400 is in scripts/bench_surface.py.
 """
 import numpy as np
 
 from gerbs_core.datasets import primitives as P
 from gerbs_core.datasets.franke import franke as franke_function
-from gerbs_core.mesh_surface import BlendingSurface
+from gerbs_core.mesh.surface import BlendingSurface
 
 
 def franke(x, y):
@@ -17,11 +17,11 @@ def franke(x, y):
     return franke_function(1, np.stack([x, y], axis=-1))
 
 
-def franke_errors(n_side, degree=2, resolution=4, seed=2):
+def franke_errors(n_side, resolution=4, seed=2):
     V, F = P.jittered_patch(n_side, seed)
     X = V.copy()
     X[:, 2] = franke(V[:, 0], V[:, 1])
-    s = BlendingSurface(X, F, degree=degree, mode="metric", rest_positions=V, boundary="keep")
+    s = BlendingSurface(X, F, rest_positions=V, boundary="keep")
     pts, _, _ = s.tessellate(resolution)
     # flat rest layout: the surface's (x, y) are exactly the planar points
     e = np.abs(pts[:, 2] - franke(pts[:, 0], pts[:, 1]))

@@ -7,7 +7,7 @@ import pytest
 from gerbs_core import MeshTopology
 from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidParameterError, ResourceLimitError
-from gerbs_core.tessellation import Lattice, output_counts
+from gerbs_core.mesh.lattice import Lattice, output_counts
 
 
 def _octagon_ring():

@@ -1,11 +1,11 @@
-"""Face shapes: cyclic polygons with the faces' edge lengths (DESIGN section 5)."""
+"""Face layouts: cyclic polygons with the faces' rest edge lengths."""
 import numpy as np
 import pytest
 
 from gerbs_core.datasets import primitives as P
-from gerbs_core.errors import InvalidMeshError, InvalidParameterError
-from gerbs_core.face_shapes import cyclic_polygon, face_shapes
-from gerbs_core.mesh_topology import MeshTopology
+from gerbs_core.errors import InvalidMeshError
+from gerbs_core.mesh.layout import cyclic_polygon, face_layouts
+from gerbs_core.mesh.topology import MeshTopology
 
 
 def _check_cyclic(pts, lengths):
@@ -40,14 +40,15 @@ def test_regular_polygons_have_regular_angles():
         pts = cyclic_polygon(np.ones((1, n)))[0]
         _check_cyclic(pts, np.ones(n))
         topo = MeshTopology([list(range(n))], n)
-        sh = face_shapes(topo.face_offsets, topo.face_vertices, "regular")
+        t = 2 * np.pi * np.arange(n) / n
+        sh = face_layouts(topo, np.stack([np.cos(t), np.sin(t), 0 * t], 1))
         assert np.allclose(sh.angles, np.pi * (n - 2) / n, atol=1e-14)
 
 
 def test_triangles_exact_and_metric_lengths_from_positions():
     V, F = P.delaunay_patch(40, 1)
     topo = MeshTopology(F, len(V))
-    sh = face_shapes(topo.face_offsets, topo.face_vertices, "metric", V)
+    sh = face_layouts(topo, V)
     # flat triangles are congruent to their 3D shapes: same corner angles
     fv, nx, pv = topo.face_vertices, topo.corner_next, topo.corner_prev
     a, b = V[fv[nx]] - V[fv], V[fv[pv]] - V[fv]
@@ -62,7 +63,7 @@ def test_triangles_exact_and_metric_lengths_from_positions():
 def test_mixed_mesh_shared_edges_have_equal_lengths():
     V, F = P.mixed_mesh(bend=0.5)
     topo = MeshTopology(F, len(V))
-    sh = face_shapes(topo.face_offsets, topo.face_vertices, "metric", V)
+    sh = face_layouts(topo, V)
     c = sh.corners
     L = np.linalg.norm(c[topo.corner_next] - c, axis=1)
     tw = topo.halfedge_twin
@@ -74,10 +75,8 @@ def test_mixed_mesh_shared_edges_have_equal_lengths():
 
 def test_bad_input():
     topo = MeshTopology([[0, 1, 2, 3]], 4)
-    with pytest.raises(InvalidParameterError, match="mode"):
-        face_shapes(topo.face_offsets, topo.face_vertices, "weird")
     # an edge as long as the three others together: no convex polygon
     pos = np.array([[0, 0, 0], [3, 0, 0], [2, 0.0, 0], [1, 0, 0]], float)
     with pytest.raises(InvalidMeshError) as e:
-        face_shapes(topo.face_offsets, topo.face_vertices, "metric", pos)
+        face_layouts(topo, pos)
     assert e.value.problem == "degenerate_face" and e.value.indices == (0,)

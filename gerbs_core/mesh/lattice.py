@@ -31,7 +31,7 @@ from functools import cached_property, lru_cache
 
 import numpy as np
 
-from .errors import InvalidParameterError, ResourceLimitError
+from ..errors import InvalidParameterError, ResourceLimitError
 
 __all__ = ["Lattice", "output_counts"]
 
@@ -450,6 +450,30 @@ class Lattice:
         off = np.zeros(self.topology.n_faces + 1, dtype=np.int64)
         np.cumsum(np.bincount(self.face, minlength=self.topology.n_faces), out=off[1:])
         return order, off
+
+    def corner_weights(self, local: bool = False) -> np.ndarray:
+        """(P, n_max) weights of each sample's face corners (slot k = corner k of its face,
+        0 beyond the face size): sum_k w_k X_k is :meth:`map_to_polygon` of per-corner
+        values X (n-gon centres the corners' mean), as a linear map."""
+        tp = self.topology
+        face, fan, uv = ((self.local_face, self.local_fan, self.local_uv) if local
+                         else (self.face, self.fan, self.uv))
+        n = tp.face_sizes[face]
+        a, b = uv[:, 0], uv[:, 1]
+        w = np.zeros((len(face), int(tp.face_sizes.max())))
+        s = n == 3
+        if s.any():
+            w[s, 0], w[s, 1], w[s, 2] = 1 - a[s] - b[s], a[s], b[s]
+        s = n == 4
+        if s.any():
+            w[s, 0], w[s, 1] = (1 - a[s]) * (1 - b[s]), a[s] * (1 - b[s])
+            w[s, 2], w[s, 3] = a[s] * b[s], (1 - a[s]) * b[s]
+        s = np.flatnonzero(n >= 5)
+        if len(s):
+            w[s] = ((1 - a[s] - b[s]) / n[s])[:, None] * (np.arange(w.shape[1]) < n[s][:, None])
+            w[s, fan[s]] += a[s]
+            w[s, (fan[s] + 1) % n[s]] += b[s]
+        return w
 
     def map_to_polygon(self, corners2d, centers=None, local: bool = False) -> np.ndarray:
         """Map samples into their faces' reference polygons (vectorized).

@@ -4,7 +4,8 @@
 (F,k) int array; triangles, quads, n-gons, mixed; boundaries allowed) and is
 immutable. It validates the mesh as an oriented 2-manifold with boundary and
 raises :class:`~gerbs_core.errors.InvalidMeshError` otherwise (problem tags
-below). :func:`validate_geometry` checks vertex positions against a topology.
+below). :func:`gerbs_core.mesh.validation.validate_geometry` checks vertex
+positions against a topology.
 
 Conventions (all arrays int64, read-only):
 
@@ -50,9 +51,9 @@ from functools import cached_property
 
 import numpy as np
 
-from .errors import InvalidMeshError
+from ..errors import InvalidMeshError
 
-__all__ = ["MeshTopology", "validate_geometry"]
+__all__ = ["MeshTopology", "edge_error"]
 
 
 def _ro(a) -> np.ndarray:
@@ -61,7 +62,7 @@ def _ro(a) -> np.ndarray:
     return a
 
 
-def _edge_error(problem, what, pairs, faces):
+def edge_error(problem, what, pairs, faces):
     pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     shown = ", ".join(f"({a}, {b})" for a, b in pairs[:10].tolist())
     more = f" ... ({len(pairs)} edges in all)" if len(pairs) > 10 else ""
@@ -187,7 +188,7 @@ class MeshTopology:
         if (counts > 2).any():
             bad_e = starts[counts > 2]
             grp = np.repeat(counts > 2, counts)
-            raise _edge_error("non_manifold_edge", "are shared by more than two faces",
+            raise edge_error("non_manifold_edge", "are shared by more than two faces",
                               np.stack([lo[eorder[bad_e]], hi[eorder[bad_e]]], 1),
                               cface[eorder[grp]])
         E = len(starts)
@@ -200,7 +201,7 @@ class MeshTopology:
         h0, h1 = e_he[two, 0], e_he[two, 1]
         same = a[h0] == a[h1]
         if same.any():
-            raise _edge_error("inconsistent_orientation", "are traversed in the same direction "
+            raise edge_error("inconsistent_orientation", "are traversed in the same direction "
                               "by both their faces (flipped face orientation or non-orientable "
                               "surface)", np.stack([lo[h0[same]], hi[h0[same]]], 1),
                               np.concatenate([cface[h0[same]], cface[h1[same]]]))
@@ -441,46 +442,3 @@ class MeshTopology:
     def __repr__(self):
         return (f"MeshTopology(V={self.n_vertices}, E={self.n_edges}, F={self.n_faces}, "
                 f"boundary_edges={int(self.edge_is_boundary.sum())})")
-
-
-def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12) -> None:
-    """Check vertex positions (V, d), d = 2 or 3, against ``topology``; return None or raise.
-
-    Tags (checked in this order): ``bad_shape`` (wrong shape / count),
-    ``non_finite`` (NaN or inf coordinates; element vertex), ``zero_length_edge``
-    (|x_a - x_b| <= rtol * D, D the bounding-box diagonal; element vertex, the
-    end points, ``err.edges`` the pairs), ``degenerate_face`` for zero-area /
-    collinear faces: |vector area| <= rtol * (longest edge of the face)**2
-    (element face). The vector area sum_k x_k x x_{k+1} / 2 vanishes exactly
-    for collinear corners and for self-cancelling (bow-tie) polygons.
-    """
-    x = np.asarray(vertices)
-    if x.ndim != 2 or x.shape[1] not in (2, 3) or x.shape[0] != topology.n_vertices \
-            or x.dtype.kind not in "fiu":
-        raise InvalidMeshError("bad_shape", f"bad_shape: vertices must be a real ({topology.n_vertices}"
-                               f", 3) array, got shape {x.shape} dtype {x.dtype}", None, "vertex")
-    x = x.astype(np.float64)  # a copy
-    if x.shape[1] == 2:
-        x = np.concatenate([x, np.zeros((len(x), 1))], 1)
-    nf = ~np.isfinite(x).all(axis=1)
-    if nf.any():
-        raise InvalidMeshError("non_finite", "non_finite: NaN or infinite coordinates at vertices",
-                               np.flatnonzero(nf), "vertex")
-    diag = float(np.linalg.norm(x.max(0) - x.min(0)))
-    e = topology.edges
-    length = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)
-    short = length <= rtol * diag
-    if short.any():
-        raise _edge_error("zero_length_edge", f"have length <= {rtol:g} * bounding-box diagonal",
-                          e[short], topology.edge_faces[short][topology.edge_faces[short] >= 0])
-    fv, nxt, cf = topology.face_vertices, topology.corner_next, topology.corner_face
-    base = x[fv[topology.face_offsets[cf]]]  # relative to the first corner: no cancellation
-    p, q = x[fv] - base, x[fv[nxt]] - base
-    varea = np.zeros((topology.n_faces, 3))
-    np.add.at(varea, cf, np.cross(p, q))  # twice the vector area
-    longest = np.zeros(topology.n_faces)
-    np.maximum.at(longest, cf, length[topology.halfedge_edge])
-    flat = 0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2
-    if flat.any():
-        raise InvalidMeshError("degenerate_face", "degenerate_face: zero area (collinear "
-                               "corners) in faces", np.flatnonzero(flat), "face")

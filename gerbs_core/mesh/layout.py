@@ -1,10 +1,12 @@
-"""Face shapes: a planar convex reference polygon D_f for every face (DESIGN section 5).
+"""Face layouts: a planar convex reference polygon D_f for every face (the domain).
 
-Every face f with n corners gets the *cyclic* polygon with f's edge lengths:
-all 1 in mode ``"regular"`` (topology only, like subdivision surfaces) or the 3D
-edge lengths of the rest positions in mode ``"metric"``. Shared edges then have
-equal lengths on both sides, so neighbouring faces glue isometrically, which is
-what makes the vertex charts (:mod:`gerbs_core.charts`) consistent.
+Every face f with n corners gets the *cyclic* polygon with f's 3D edge lengths
+in the rest shape the surface is bound to. Shared edges then have equal lengths
+on both sides, so neighbouring faces glue isometrically, which is what makes
+the vertex charts (:mod:`gerbs_core.mesh.charts`) consistent, and the layouts
+follow the geometry: a topology-only layout (every face a unit regular polygon,
+the original design's default) measured 5.5x too tall on Blender's Cylinder,
+whose 2-unit side quads and radius-1 caps it would draw at the same size.
 
 Frame of D_f ("face local coordinates"): corner 0 at the origin, edge 0 (corner 0
 -> corner 1) along +x, corners counter-clockwise. Triangles are placed exactly
@@ -20,28 +22,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InvalidMeshError, InvalidParameterError
+from ..errors import InvalidMeshError
 
-__all__ = ["FaceShapes", "face_shapes", "cyclic_polygon"]
-
-MODES = ("regular", "metric")
+__all__ = ["FaceLayouts", "face_layouts", "cyclic_polygon"]
 
 
 @dataclass(frozen=True)
-class FaceShapes:
+class FaceLayouts:
     """Reference polygons of all faces, stored per corner (CSR like the topology).
 
     Attributes (C = number of corners = sum of face sizes):
       corners (C, 2): corner positions in their face's local frame.
       angles (C,): interior angle of D_f at each corner (radians, in (0, pi)).
       lengths (C,): length of the edge from each corner to the next one of its face.
-      mode: "regular" or "metric".
     """
 
     corners: np.ndarray
     angles: np.ndarray
     lengths: np.ndarray
-    mode: str
 
 
 def cyclic_polygon(lengths: np.ndarray) -> np.ndarray:
@@ -118,33 +116,18 @@ def _corner_angles(corners: np.ndarray) -> np.ndarray:
     return np.arctan2(cross, dot)
 
 
-def face_shapes(face_offsets: np.ndarray, face_vertices: np.ndarray, mode: str = "regular",
-                positions: np.ndarray | None = None) -> FaceShapes:
-    """Reference polygons D_f for all faces (CSR faces: offsets (F+1,), corners (C,)).
+def face_layouts(topo, positions: np.ndarray) -> FaceLayouts:
+    """Reference polygons D_f of all faces: cyclic polygons with the edge lengths of
+    `positions` (V, 3), the rest shape the surface is bound to.
 
-    mode "regular": unit edges; "metric": 3D edge lengths of `positions` (V,3)
-    (the rest positions). Raises InvalidParameterError for an unknown mode and
-    InvalidMeshError("degenerate_face") naming the faces whose edge lengths admit
+    Raises InvalidMeshError("degenerate_face") naming the faces whose edge lengths admit
     no convex polygon (some edge >= sum of the others, or zero length).
     """
-    if mode not in MODES:
-        raise InvalidParameterError("mode", f"must be one of {MODES}, got {mode!r}")
-    off = np.asarray(face_offsets, dtype=np.int64)
-    fv = np.asarray(face_vertices, dtype=np.int64)
-    F = len(off) - 1
-    sizes = np.diff(off)
-    C = len(fv)
-    nxt_corner = np.arange(C) + 1
-    nxt_corner[off[1:] - 1] = off[:-1]
-    if mode == "regular":
-        lengths = np.ones(C)
-    else:
-        if positions is None:
-            raise InvalidParameterError("positions", "metric mode needs positions")
-        P = np.asarray(positions, dtype=np.float64)
-        lengths = np.linalg.norm(P[fv[nxt_corner]] - P[fv], axis=1)
-    corners = np.zeros((C, 2))
-    angles = np.zeros(C)
+    off, fv, sizes = topo.face_offsets, topo.face_vertices, topo.face_sizes
+    P = np.asarray(positions, dtype=np.float64)
+    lengths = np.linalg.norm(P[fv[topo.corner_next]] - P[fv], axis=1)
+    corners = np.zeros((len(fv), 2))
+    angles = np.zeros(len(fv))
     bad = []
     for n in np.unique(sizes):
         fs = np.nonzero(sizes == n)[0]
@@ -163,4 +146,6 @@ def face_shapes(face_offsets: np.ndarray, face_vertices: np.ndarray, mode: str =
                                "faces whose edge lengths admit no convex polygon "
                                "(an edge is not shorter than the sum of the others)",
                                sorted(bad), "face")
-    return FaceShapes(corners, angles, lengths, mode)
+    for a in (corners, angles, lengths):
+        a.flags.writeable = False
+    return FaceLayouts(corners, angles, lengths)

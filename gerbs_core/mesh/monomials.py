@@ -1,0 +1,92 @@
+"""Monomials of the local functions l_v(y) = X_v + sum_m c_m y^m (chart coordinates y).
+
+The monomials y1^a y2^b with 1 <= a + b <= degree, in graded order (degree 1
+first, then 2, ...), so that the coefficients of a lower degree are a prefix of
+those of a higher one: local functions of different degrees share one padded
+coefficient array.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+__all__ = ["monomial_exponents", "monomials", "n_monomials", "bending_gram"]
+
+
+@lru_cache(maxsize=None)
+def _exponents(degree: int) -> np.ndarray:
+    e = np.array([(k - j, j) for k in range(1, degree + 1) for j in range(k + 1)],
+                 dtype=np.int64).reshape(-1, 2)
+    e.flags.writeable = False
+    return e
+
+
+def monomial_exponents(degree: int) -> np.ndarray:
+    """Exponents (M, 2) of the monomials of total degree 1..degree (graded order)."""
+    return _exponents(int(degree))
+
+
+def n_monomials(degree: int) -> int:
+    """M = degree (degree + 3) / 2, the number of monomials of degree 1..degree."""
+    return int(degree) * (int(degree) + 3) // 2
+
+
+def monomials(y: np.ndarray, degree: int, nu: int = 0):
+    """Monomials of chart points y (..., 2) and their derivatives, exact.
+
+    Returns [m (..., M), dm (..., M, 2), d2m (..., M, 2, 2)] up to order nu.
+    """
+    y = np.asarray(y, dtype=np.float64)
+    E = monomial_exponents(degree)
+    M = len(E)
+    shape = y.shape[:-1]
+    p1 = [np.ones(shape)]
+    p2 = [np.ones(shape)]
+    for _ in range(degree):
+        p1.append(p1[-1] * y[..., 0])
+        p2.append(p2[-1] * y[..., 1])
+    out = [np.stack([p1[a] * p2[b] for a, b in E], axis=-1) if M else np.zeros(shape + (0,))]
+    if nu >= 1:
+        d = np.zeros(shape + (M, 2))
+        for i, (a, b) in enumerate(E):
+            if a:
+                d[..., i, 0] = a * p1[a - 1] * p2[b]
+            if b:
+                d[..., i, 1] = b * p1[a] * p2[b - 1]
+        out.append(d)
+    if nu >= 2:
+        h = np.zeros(shape + (M, 2, 2))
+        for i, (a, b) in enumerate(E):
+            if a >= 2:
+                h[..., i, 0, 0] = a * (a - 1) * p1[a - 2] * p2[b]
+            if b >= 2:
+                h[..., i, 1, 1] = b * (b - 1) * p1[a] * p2[b - 2]
+            if a and b:
+                h[..., i, 0, 1] = h[..., i, 1, 0] = a * b * p1[a - 1] * p2[b - 1]
+        out.append(h)
+    return out
+
+
+@lru_cache(maxsize=None)
+def bending_gram(degree: int) -> np.ndarray:
+    """G (M, M): int over the unit disc of <D^2 m_i, D^2 m_j> (Frobenius), plus
+    pi * I on the linear monomials (whose second derivatives vanish).
+
+    A rotation-invariant positive definite metric on the coefficients: the fits
+    choose the smoothest polynomial in it when the data do not determine one
+    (:func:`gerbs_core.mesh.fits.solve_pinned`), so a fit does not depend on how
+    its chart is rotated. Exact (polar quadrature of a polynomial integrand).
+    """
+    n = 2 * degree + 2
+    r, wr = np.polynomial.legendre.leggauss(n)
+    r, wr = 0.5 * (r + 1.0), 0.5 * wr                      # [0, 1]
+    t = 2 * np.pi * np.arange(4 * n) / (4 * n)             # exact for trig. degree < 4n
+    R, T = np.meshgrid(r, t, indexing="ij")
+    w = (wr[:, None] * R) * (2 * np.pi / len(t))           # r dr dtheta
+    y = np.stack([R * np.cos(T), R * np.sin(T)], -1).reshape(-1, 2)
+    H = monomials(y, degree, 2)[2]
+    G = np.einsum("p,pmij,pnij->mn", w.ravel(), H, H)
+    G[:2, :2] += np.pi * np.eye(2)
+    G.flags.writeable = False
+    return G

@@ -1,0 +1,355 @@
+"""C-infinity GERBS blending surfaces through the vertices of a polygon mesh.
+
+    S(p) = sum_v Psi_v(p) l_v(zeta_v(p)),   Psi_v = psi_v / sum_u psi_u   (eq. (27), B = Psi by eq. (73))
+
+The stages, each its own module of :mod:`gerbs_core.mesh`: topology and
+geometry checks -> face layouts with the rest edge lengths (:mod:`.layout`) ->
+vertex charts (:mod:`.charts`) -> the star cover of smooth size functions
+(:mod:`.cover`) -> data rings and candidate fits (:mod:`.rings`, :mod:`.fits`)
+-> the choice and coupling that make neighbouring local functions agree
+(:mod:`.agreement`) -> evaluation (:mod:`.evaluate`), tessellation
+(:mod:`.lattice`) and stencils (:mod:`.stencil`). docs/design.md describes the
+design and the measurements behind it.
+
+Exact: everything is closed form up to round-off, except the kernel's F
+(tabulated to ~1e-13, :mod:`gerbs_core.kernels`). Near every vertex Psi_v = 1,
+so S = l_v there and S(v) = X_v.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import InvalidParameterError, ResourceLimitError
+from .agreement import MMAX, FairnessRule, fair_fits
+from .charts import BOUNDARY_RULES, vertex_charts
+from .cover import require_cover, star_cover
+from .evaluate import corner_terms, evaluate, groups
+from .layout import face_layouts
+from .memory import memory_estimate
+from .monomials import monomials
+from .rings import data_rings
+from .stencil import Stencil
+from .topology import MeshTopology
+from .validation import validate_geometry
+
+__all__ = ["BlendingSurface", "SurfaceModel"]
+
+
+def _points(name, a, V=None):
+    try:
+        x = np.array(a, dtype=np.float64, copy=True)  # never alias the caller's array
+    except (TypeError, ValueError):
+        raise InvalidParameterError(name, f"must be a real (V, 3) array, got {type(a).__name__}") \
+            from None
+    if x.ndim != 2 or x.shape[1] != 3 or (V is not None and len(x) != V):
+        raise InvalidParameterError(name, f"must be a ({'V' if V is None else V}, 3) array, "
+                                    f"got shape {x.shape}")
+    return x
+
+
+def _positive(name, value, integer=False, lo=0.0, closed=False):
+    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+    if ok:
+        v = float(value)
+        ok = np.isfinite(v) and (v >= lo if closed else v > lo) and (not integer or v == int(v))
+    if not ok:
+        kind = "an integer" if integer else "a finite number"
+        raise InvalidParameterError(name, f"must be {kind} {'>=' if closed else '>'} {lo:g}, "
+                                    f"got {value!r}")
+    return int(value) if integer else float(value)
+
+
+@dataclass(frozen=True)
+class SurfaceModel:
+    """Everything of a surface that is fixed by the topology, the rest shape and the
+    settings (built once; shared by every surface made with :meth:`BlendingSurface.with_positions`).
+
+    degrees (V,) the local functions' degrees; operator (V MMAX, V) their coefficients
+    as a linear map of the positions (:func:`gerbs_core.mesh.agreement.fair_fits`).
+    """
+
+    topology: MeshTopology
+    layouts: object
+    charts: object
+    cover: object
+    degrees: np.ndarray
+    operator: object
+    boundary: str
+
+    @property
+    def max_degree(self) -> int:
+        return int(self.degrees.max())
+
+
+class BlendingSurface:
+    """GERBS blending surface of a polygon mesh (triangles, quads, n-gons; boundaries).
+
+    Parameters
+    ----------
+    vertices : (V, 3) positions. faces : list of int sequences, (F, k) array or a
+        :class:`~gerbs_core.mesh.topology.MeshTopology`.
+    kernel : the GERBS kernel of the size functions (default ``ERBS()``).
+    rest_positions : (V, 3) the rest shape the layouts and fits are bound to
+        (default: ``vertices``); the output is a fixed sparse linear function of the
+        positions for a fixed topology and rest shape (:meth:`stencil`).
+    boundary : ``"keep"`` (boundary vertices keep their angles: flat meshes are
+        reproduced exactly) or ``"straighten"`` (the border passes smoothly through
+        boundary vertices; mesh corners get rounded).
+    normals : optional (V, 3) vertex normals as Hermite data: the tangent plane of l_v
+        is orthogonal to n_v (the surface is then not W @ X: no stencil).
+    fairness : :class:`~gerbs_core.mesh.agreement.FairnessRule` (the measured default).
+    kappa, shrink : envelope parameters of the star cover (:mod:`gerbs_core.gauge.envelope`).
+    exact_gauge : the exact (kinked) star radius: a deliberately non-smooth variant,
+        the control of the smoothness tests.
+    memory_budget : bytes a tessellation or stencil may use (ResourceLimitError beyond).
+    eps0_resolution : lattice resolution of the cover-thickness check :attr:`eps0`.
+
+    Raises InvalidMeshError (topology/geometry) or InvalidParameterError; the
+    caller's arrays are never modified. Immutable.
+    """
+
+    def __init__(self, vertices, faces, kernel=None, rest_positions=None, boundary: str = "keep",
+                 normals=None, *, fairness: FairnessRule | None = None, kappa: float = 0.8,
+                 shrink: float = 0.95, exact_gauge: bool = False, memory_budget: float = 2.0e9,
+                 eps0_resolution: int = 6):
+        X = _points("vertices", vertices)
+        topo = faces if isinstance(faces, MeshTopology) else MeshTopology(faces, len(X))
+        if topo.n_vertices != len(X):
+            raise InvalidParameterError("vertices", f"must have {topo.n_vertices} rows (the "
+                                        f"topology's vertices), got {len(X)}")
+        validate_geometry(X, topo)
+        rest = X if rest_positions is None else _points("rest_positions", rest_positions, len(X))
+        if rest_positions is not None:
+            validate_geometry(rest, topo)
+        if kernel is None:
+            from ..kernels import ERBS
+            kernel = ERBS()
+        from ..kernels import Kernel
+        if not isinstance(kernel, Kernel):
+            raise InvalidParameterError("kernel", f"must be a gerbs_core.kernels.Kernel, got "
+                                        f"{type(kernel).__name__}")
+        if boundary not in BOUNDARY_RULES:
+            raise InvalidParameterError("boundary", f"must be one of {BOUNDARY_RULES}, got "
+                                        f"{boundary!r}")
+        if not (isinstance(shrink, (int, float)) and 0.0 < shrink <= 1.0):
+            raise InvalidParameterError("shrink", f"must be in (0, 1], got {shrink!r}")
+        if not (isinstance(kappa, (int, float)) and 0.0 < kappa < 1.0):
+            raise InvalidParameterError("kappa", f"must be in (0, 1), got {kappa!r}")
+        fairness = FairnessRule() if fairness is None else fairness
+        if not isinstance(fairness, FairnessRule):
+            raise InvalidParameterError("fairness", "must be a FairnessRule")
+        self.memory_budget = _positive("memory_budget", memory_budget)
+        self.eps0_resolution = _positive("eps0_resolution", eps0_resolution, integer=True, lo=1,
+                                         closed=True)
+        self.kernel = kernel
+        self._normals = None if normals is None else self._unit_normals(normals, len(X))
+        layouts = face_layouts(topo, rest)
+        charts = vertex_charts(topo, layouts.corners, layouts.angles, boundary)
+        cover = star_cover(topo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge)
+        rings = data_rings(topo, charts, layouts.corners)
+        degrees, operator = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
+        degrees.flags.writeable = False
+        self.model = SurfaceModel(topo, layouts, charts, cover, degrees, operator, boundary)
+        self._X = X
+        self._X.flags.writeable = False
+        self._coef = self._coefficients(X)
+
+    # ------------------------------------------------------------------ data
+    @staticmethod
+    def _unit_normals(normals, V):
+        nrm = _points("normals", normals, V)
+        ln = np.linalg.norm(nrm, axis=1)
+        if not np.all(np.isfinite(ln)) or np.any(ln == 0):
+            raise InvalidParameterError("normals", "must be finite and non-zero")
+        return nrm / ln[:, None]
+
+    def _coefficients(self, X):
+        """(V, MMAX, 3) coefficients of the local functions for positions X; with Hermite
+        normals the linear part is projected onto the planes orthogonal to them."""
+        C = np.stack([self.model.operator @ X[:, k] for k in range(3)], -1).reshape(-1, MMAX, 3)
+        if self._normals is not None:
+            n = self._normals
+            C[:, :2] -= np.einsum("vmk,vk->vm", C[:, :2], n)[..., None] * n[:, None, :]
+        C.flags.writeable = False
+        return C
+
+    @property
+    def topology(self) -> MeshTopology:
+        return self.model.topology
+
+    @property
+    def layouts(self):
+        """Face layouts (:class:`gerbs_core.mesh.layout.FaceLayouts`)."""
+        return self.model.layouts
+
+    @property
+    def charts(self):
+        return self.model.charts
+
+    @property
+    def degrees(self) -> np.ndarray:
+        """(V,) degree of each vertex's local function (chosen, :mod:`.agreement`)."""
+        return self.model.degrees
+
+    @property
+    def boundary(self) -> str:
+        return self.model.boundary
+
+    @property
+    def vertices(self) -> np.ndarray:
+        return self._X.copy()
+
+    @property
+    def coefficients(self) -> np.ndarray:
+        """(V, M, 3) read-only coefficients of the local functions (graded monomials)."""
+        return self._coef
+
+    def with_positions(self, vertices) -> "BlendingSurface":
+        """The surface of new positions with the same binding (model shared, not copied)."""
+        new = object.__new__(BlendingSurface)
+        new.__dict__.update({k: v for k, v in self.__dict__.items() if k != "eps0"})
+        new._X = _points("vertices", vertices, len(self._X))
+        new._X.flags.writeable = False
+        new._coef = new._coefficients(new._X)
+        return new
+
+    # ------------------------------------------------------------ the cover
+    @cached_property
+    def eps0(self) -> float:
+        """min over a check lattice (every lattice point of every face, resolution
+        ``eps0_resolution``) of max_v psi_v: the thickness of the cover (Definition 11);
+        > 0 means no point is left uncovered."""
+        from .lattice import Lattice
+        lat = Lattice(self.topology, self.eps0_resolution)
+        x = lat.map_to_polygon(self.layouts.corners, local=True)
+        return self._evaluate(lat.local_face, x, 0)[1]
+
+    def _require_cover(self, eps: float) -> None:
+        require_cover(eps, self.kernel)
+
+    def _evaluate(self, f, x, nu):
+        return evaluate(self.model, self._X, self._coef, f, x, nu)
+
+    # ---------------------------------------------------------------- public
+    def _face_points(self, face_index, local_coords):
+        x = np.asarray(local_coords, dtype=np.float64)
+        if x.shape[-1:] != (2,):
+            raise InvalidParameterError("local_coords", f"must have shape (..., 2), got {x.shape}")
+        if not np.all(np.isfinite(x)):
+            raise InvalidParameterError("local_coords", "must be finite")
+        try:
+            f = np.broadcast_to(np.asarray(face_index), x.shape[:-1])
+        except ValueError:
+            raise InvalidParameterError("face_index", f"does not broadcast against "
+                                        f"local_coords {x.shape}") from None
+        if f.dtype.kind not in "iu":
+            raise InvalidParameterError("face_index", "must be integers")
+        f = f.astype(np.int64).ravel()
+        if np.any((f < 0) | (f >= self.topology.n_faces)):
+            raise InvalidParameterError("face_index", "out of range")
+        return f, x.reshape(-1, 2), x.shape[:-1]
+
+    def evaluate_all(self, face_index, local_coords, nu: int = 0):
+        """[S (..., 3), dS (..., 3, 2), d2S (..., 3, 2, 2)] up to nu at points of faces, in
+        face layout coordinates (:mod:`gerbs_core.mesh.layout`); exact to round-off."""
+        if nu not in (0, 1, 2):
+            raise InvalidParameterError("nu", f"must be 0, 1 or 2, got {nu!r}")
+        f, x, shape = self._face_points(face_index, local_coords)
+        out, eps = self._evaluate(f, x, nu)
+        self._require_cover(eps)
+        return [o.reshape(shape + o.shape[1:]) for o in out]
+
+    def evaluate(self, face_index, local_coords, nu: int = 0):
+        """S (nu = 0, (..., 3)) or its nu-th derivative w.r.t. the layout coordinates."""
+        return self.evaluate_all(face_index, local_coords, nu)[nu]
+
+    def partition(self, face_index, local_coords, nu: int = 0):
+        """The partition of unity (eq. (73)) at face points: (vertices (N, n), Psi (N, n),
+        psi (N, n)) with n the largest face size (padding: vertex -1, values 0); with
+        nu = 1 also dPsi (N, n, 2)."""
+        f, x, _ = self._face_points(face_index, local_coords)
+        nmax = int(self.topology.face_sizes.max())
+        verts = np.full((len(f), nmax), -1, dtype=np.int64)
+        Ps, ps, dP = np.zeros((len(f), nmax)), np.zeros((len(f), nmax)), np.zeros((len(f), nmax, 2))
+        for n, faces, sel, xb in groups(self.topology, self.layouts.corners, f, x):
+            u, Psi, _, _ = corner_terms(self.model, n, faces, xb, nu, degree=1)
+            cb = self.topology.face_offsets[faces][None, :, None] + np.arange(n)[:, None, None]
+            psi = self.model.cover.psi_jet(self.charts, cb, xb[None], 0)[0][0]
+            valid = sel >= 0
+            s = sel[valid]
+            for k in range(n):
+                verts[s, k] = np.broadcast_to(u[k][:, None], valid.shape)[valid]
+                Ps[s, k], ps[s, k] = Psi[0][k][valid], psi[k][valid]
+                if nu >= 1:
+                    dP[s, k] = Psi[1][k][valid]
+        return (verts, Ps, ps, dP) if nu >= 1 else (verts, Ps, ps)
+
+    def local_function(self, v: int, y, nu: int = 0):
+        """l_v and its derivatives at chart points y (N, 2): [(N,3), (N,3,2), (N,3,2,2)]."""
+        y = np.atleast_2d(np.asarray(y, dtype=np.float64))
+        d = int(self.degrees[v])
+        mm = monomials(y, d, nu)
+        C = self._coef[v, :mm[0].shape[-1]]
+        out = [self._X[v] + mm[0] @ C]
+        if nu >= 1:
+            out.append(np.einsum("pmj,mc->pcj", mm[1], C))
+        if nu >= 2:
+            out.append(np.einsum("pmjk,mc->pcjk", mm[2], C))
+        return out
+
+    def chart_evaluate(self, v: int, y, nu: int = 0, corner=None):
+        """S o zeta_v^{-1} and its derivatives w.r.t. chart coordinates y (N, 2) of vertex v.
+
+        corner: force the face (a corner of v's star) used for every point (one-sided
+        derivatives on a spoke); default: the sector containing each point.
+        """
+        from .chart_eval import chart_evaluate
+        return chart_evaluate(self, v, y, nu, corner)
+
+    # ---------------------------------------------------------- tessellation
+    def memory_estimate(self, resolution: int) -> int:
+        """Bytes a tessellation or stencil at `resolution` is expected to need at peak."""
+        return memory_estimate(self.model, resolution)
+
+    def lattice(self, resolution: int):
+        """The sample lattice at `resolution` (checked against the memory budget)."""
+        from .lattice import Lattice, output_counts
+        P, _ = output_counts(self.topology, resolution)
+        est = self.memory_estimate(resolution)
+        if est > self.memory_budget:
+            raise ResourceLimitError(f"resolution {resolution}: {P} points, estimated memory "
+                                     f"{est / 1e6:.0f} MB exceeds the budget "
+                                     f"{self.memory_budget / 1e6:.0f} MB (memory_budget)")
+        return Lattice(self.topology, resolution)
+
+    def tessellate(self, resolution: int):
+        """(points (P,3), triangles (T,3) int, normals (P,3)) at `resolution` segments per edge.
+
+        Crack-free (shared edge samples once); normals from the analytic derivatives
+        dS/dx1 x dS/dx2 (at mesh vertices from the linear part of l_v).
+        """
+        lat = self.lattice(resolution)
+        x = lat.map_to_polygon(self.layouts.corners)
+        (S, dS), eps = self._evaluate(lat.face, x, 1)
+        self._require_cover(eps)
+        nrm = np.cross(dS[..., 0], dS[..., 1])
+        nrm[lat.vertex_sample] = np.cross(self._coef[:, 0, :], self._coef[:, 1, :])
+        ln = np.linalg.norm(nrm, axis=1)
+        nrm /= np.where(ln > 0, ln, 1.0)[:, None]
+        return S, np.array(lat.triangles), nrm
+
+    def stencil(self, resolution: int) -> Stencil:
+        """The output points at `resolution` as a linear map of the positions
+        (:class:`gerbs_core.mesh.stencil.Stencil`): ``stencil.apply(X) ==
+        tessellate(resolution)[0]``. Not available with Hermite normals."""
+        if self._normals is not None:
+            raise InvalidParameterError("normals", "stencils need normals=None (with Hermite "
+                                        "normals the surface is not a linear map of X)")
+        from .assembly import assemble
+        lat = self.lattice(resolution)
+        base, mono, eps = assemble(self.model, lat)
+        self._require_cover(eps)
+        return Stencil(base, mono, self.model.operator, lat)

@@ -1,0 +1,76 @@
+"""Checks of vertex positions against a mesh topology (before any surface is built).
+
+Problem tags, checked in this order (the first failing check raises an
+:class:`~gerbs_core.errors.InvalidMeshError` naming all its offending elements):
+
+``bad_shape``        wrong shape, count or dtype (element vertex)
+``non_finite``       NaN or infinite coordinates (element vertex)
+``outlier_vertex``   vertices whose edges are all more than ``OUTLIER_FACTOR`` times
+                     the mesh's median edge length: a stray coordinate (1e20 in one
+                     vertex) would otherwise make every other edge look of zero length
+``zero_length_edge`` an edge no longer than ``rtol`` times the median edge length
+``degenerate_face``  zero-area (collinear or self-cancelling) faces
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InvalidMeshError
+from .topology import MeshTopology, edge_error
+
+__all__ = ["validate_geometry", "OUTLIER_FACTOR"]
+
+# A vertex whose shortest edge is 1e6 median edge lengths away is a stray coordinate,
+# not a feature: at that scale ratio float64 keeps only ~10 digits of the rest of the
+# mesh in any expression that mixes both.
+OUTLIER_FACTOR = 1e6
+
+
+def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12) -> None:
+    """Check vertex positions (V, d), d = 2 or 3, against ``topology``; return None or raise.
+
+    Tags in the module docstring. ``zero_length_edge``: |x_a - x_b| <= rtol * median edge
+    length (element vertex, the end points, ``err.edges`` the pairs);
+    ``degenerate_face``: |vector area| <= rtol * (longest edge of the face)**2 (element
+    face; the vector area sum_k x_k x x_{k+1} / 2 vanishes exactly for collinear
+    corners and for self-cancelling polygons).
+    """
+    x = np.asarray(vertices)
+    if x.ndim != 2 or x.shape[1] not in (2, 3) or x.shape[0] != topology.n_vertices \
+            or x.dtype.kind not in "fiu":
+        raise InvalidMeshError("bad_shape", f"bad_shape: vertices must be a real ({topology.n_vertices}"
+                               f", 3) array, got shape {x.shape} dtype {x.dtype}", None, "vertex")
+    x = x.astype(np.float64)  # a copy
+    if x.shape[1] == 2:
+        x = np.concatenate([x, np.zeros((len(x), 1))], 1)
+    nf = ~np.isfinite(x).all(axis=1)
+    if nf.any():
+        raise InvalidMeshError("non_finite", "non_finite: NaN or infinite coordinates at vertices",
+                               np.flatnonzero(nf), "vertex")
+    e = topology.edges
+    length = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)
+    scale = float(np.median(length))
+    shortest = np.full(topology.n_vertices, np.inf)
+    np.minimum.at(shortest, e[:, 0], length)
+    np.minimum.at(shortest, e[:, 1], length)
+    far = (shortest > OUTLIER_FACTOR * scale) & (scale > 0)
+    if far.any():
+        raise InvalidMeshError("outlier_vertex", f"outlier_vertex: every edge of these vertices "
+                               f"is more than {OUTLIER_FACTOR:g} times the median edge length "
+                               f"{scale:.3g} (a stray coordinate?); vertices",
+                               np.flatnonzero(far), "vertex")
+    short = length <= rtol * scale
+    if short.any():
+        raise edge_error("zero_length_edge", f"have length <= {rtol:g} * the median edge length",
+                          e[short], topology.edge_faces[short][topology.edge_faces[short] >= 0])
+    fv, nxt, cf = topology.face_vertices, topology.corner_next, topology.corner_face
+    base = x[fv[topology.face_offsets[cf]]]  # relative to the first corner: no cancellation
+    p, q = x[fv] - base, x[fv[nxt]] - base
+    varea = np.zeros((topology.n_faces, 3))
+    np.add.at(varea, cf, np.cross(p, q))  # twice the vector area
+    longest = np.zeros(topology.n_faces)
+    np.maximum.at(longest, cf, length[topology.halfedge_edge])
+    flat = 0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2
+    if flat.any():
+        raise InvalidMeshError("degenerate_face", "degenerate_face: zero area (collinear "
+                               "corners) in faces", np.flatnonzero(flat), "face")

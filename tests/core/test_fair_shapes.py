@@ -1,0 +1,98 @@
+"""The fair-shape rule (gerbs_core.mesh.agreement): shapes a modeller checks first.
+
+Thresholds are the acceptance bounds of the fair-shape issue (boxes) or the peers'
+values measured by scripts/bench_shape.py on the same inputs at the same density
+(Loop, Modified Butterfly); each test also shows the check failing on a variant
+without the rule's ingredient it guards.
+"""
+import numpy as np
+import pytest
+
+from gerbs_core import BlendingSurface, FairnessRule
+from gerbs_core.datasets import primitives as P
+from gerbs_core.testing import fold_counts, mean_curvature_from_derivatives
+
+PLAIN = FairnessRule(candidates=((2, 1),), sweeps=0)   # the former default's fits
+NO_TENSION = FairnessRule(lam=0.0)
+
+
+def _box(surface, V, r=8):
+    pts = surface.tessellate(r)[0]
+    return np.ptp(pts, axis=0) / np.ptp(V, axis=0)
+
+
+def _tris(T):
+    T = [list(t) for t in T]
+    return np.array([[t[0], t[k], t[k + 1]] for t in T for k in range(1, len(t) - 1)])
+
+
+@pytest.mark.parametrize("make,bound,tension_needed", [(P.cylinder, 1.2, True), (P.cone, 1.2, False),
+                                                       (P.cube, 1.45, True)])
+def test_cad_cages_stay_in_their_boxes(make, bound, tension_needed):
+    V, F = make()
+    box = _box(BlendingSurface(V, F), V)
+    print(make.__name__, "box / cage", np.round(box, 3))
+    assert box.max() <= bound
+    if tension_needed:  # the tension at sharp cage edges is what keeps them there
+        assert _box(BlendingSurface(V, F, fairness=NO_TENSION), V).max() > bound
+
+
+def test_cylinder_is_smooth_at_resolution_8():
+    V, F = P.cylinder()
+    pts, T, _ = BlendingSurface(V, F).tessellate(8)
+    worst = fold_counts(pts, _tris(T))["max"]
+    print("cylinder largest dihedral at r = 8:", worst)
+    assert worst <= 20.0
+
+
+def _mean_curvature(s, r=8):
+    lat = s.lattice(r)
+    x = lat.map_to_polygon(s.layouts.corners)
+    S, dS, d2S = s.evaluate_all(lat.face, x, nu=2)
+    keep = np.ones(len(S), dtype=bool)
+    keep[lat.vertex_sample] = False   # layout coordinates are singular at the vertices
+    return S[keep], mean_curvature_from_derivatives(dS[keep], d2S[keep])
+
+
+def test_sphere_curvature_beats_loop_and_converges():
+    # Loop subdivision, same inputs and density (bench_shape, cotangent estimate):
+    # icosphere levels 1, 2: 0.127, 0.054
+    loop = {1: 0.127, 2: 0.054}
+    rms = {}
+    for k in (1, 2):
+        V, F = P.icosphere(k)
+        _, H = _mean_curvature(BlendingSurface(V, F))
+        H = H * np.sign(np.mean(H))
+        rms[k] = float(np.sqrt(np.mean((H - 1.0) ** 2)))
+        assert H.min() > 0 and rms[k] <= loop[k]
+    print("icosphere H rms:", rms)
+    assert np.log2(rms[1] / rms[2]) >= 1.5     # order in h (h halves per level)
+
+
+def test_torus_curvature_beats_butterfly_and_uses_degree_4():
+    V, F = P.torus(24, 16)
+    s = BlendingSurface(V, F)
+    S, H = _mean_curvature(s)
+    R, r = 1.0, 0.4
+    rho = np.hypot(S[:, 0], S[:, 1])
+    v = np.arctan2(S[:, 2], rho - R)
+    exact = (R + 2 * r * np.cos(v)) / (2 * r * (R + r * np.cos(v)))
+    err = float(np.sqrt(np.mean((np.abs(H) - exact) ** 2)))
+    print("torus 24x16 H rms error:", err, "degrees", np.bincount(s.degrees))
+    assert err <= 0.088                 # Modified Butterfly, same density (bench_shape)
+    assert np.mean(s.degrees == 4) >= 0.9   # the choice finds the fine regular quad grid
+    _, Hp = _mean_curvature(BlendingSurface(V, F, fairness=PLAIN))
+    assert float(np.sqrt(np.mean((np.abs(Hp) - exact) ** 2))) > 0.088
+
+
+def test_suzanne_folds_are_fewer_than_with_plain_fits():
+    V, F = P.suzanne()
+    s = BlendingSurface(V, F)
+    pts, T, _ = s.tessellate(8)
+    f = fold_counts(pts, _tris(T))
+    f60, f90 = f["above_60"], f["above_90"]
+    pts, T, _ = BlendingSurface(V, F, fairness=PLAIN).tessellate(8)
+    p = fold_counts(pts, _tris(T))
+    p60, p90 = p["above_60"], p["above_90"]
+    print(f"Suzanne r = 8 pairs above 60 / 90 degrees: {f60} / {f90} (plain fits {p60} / {p90})")
+    assert f60 <= 0.7 * p60 and f90 <= 0.7 * p90

@@ -1,0 +1,122 @@
+"""Data rings and pinned fits of the local functions (gerbs_core.mesh.rings / .fits)."""
+import numpy as np
+import pytest
+
+from gerbs_core.datasets import primitives as P
+from gerbs_core.mesh.charts import vertex_charts
+from gerbs_core.mesh.fits import CANDIDATES, candidate_fits, pinned_normal_inverse
+from gerbs_core.mesh.layout import face_layouts
+from gerbs_core.mesh.monomials import bending_gram, monomial_exponents, monomials, n_monomials
+from gerbs_core.mesh.rings import data_rings
+from gerbs_core.mesh.topology import MeshTopology
+
+
+def _setup(V, F, rest=None):
+    topo = MeshTopology(F, len(V))
+    sh = face_layouts(topo, V if rest is None else rest)
+    ch = vertex_charts(topo, sh.corners, sh.angles, "keep")
+    return topo, sh, ch, data_rings(topo, ch, sh.corners)
+
+
+def _poly(d, rng):
+    E = monomial_exponents(d)
+    c = rng.normal(size=len(E))
+    return lambda x, y: 0.4 + sum(ci * x ** a * y ** b for ci, (a, b) in zip(c, E))
+
+
+@pytest.mark.parametrize("degree,layers", CANDIDATES)
+def test_flat_fits_reproduce_polynomials_of_their_degree(degree, layers):
+    V, F = P.delaunay_patch(80, 4)
+    rng = np.random.default_rng(degree)
+    p = _poly(degree, rng)
+    topo, sh, ch, rings = _setup(V, F)
+    fits = candidate_fits(rings, degree, layers)
+    M = n_monomials(degree)
+    Z = p(V[:, 0], V[:, 1])
+    C = (fits.matrix @ Z).reshape(len(V), M)
+    # vertices whose data determine a polynomial of the degree (full-rank normal matrix)
+    ev = np.linalg.eigvalsh(fits.normal)
+    determined = ev[:, 0] > 1e-6 * ev[:, -1]
+    inner = np.flatnonzero(~topo.vertex_is_boundary & determined)
+    assert len(inner) >= (0.5 * (~topo.vertex_is_boundary).sum() if degree < 4 else 5)
+    for v in inner:
+        c = topo.star_corners[topo.star_offsets[v]]
+        n = topo.corner_next[c]
+        yn = ch.to_chart(c, sh.corners[n])[0]
+        dn = V[topo.face_vertices[n], :2] - V[v, :2]
+        rot = complex(*yn) / complex(*dn)  # chart = rotation of the plane about X_v
+        assert abs(abs(rot) - 1) < 1e-11
+        y = rng.uniform(-0.2, 0.2, size=(5, 2))
+        xy = np.array([complex(*t) / rot for t in y])
+        want = p(V[v, 0] + xy.real, V[v, 1] + xy.imag)
+        got = Z[v] + monomials(y, degree)[0] @ C[v]
+        assert np.abs(got - want).max() < 1e-9
+
+
+def test_fits_are_linear_and_pinned():
+    V, F = P.icosphere(1)
+    *_, rings = _setup(V, F)
+    fits = candidate_fits(rings, 3, 2)
+    rng = np.random.default_rng(1)
+    A, B = rng.normal(size=len(V)), rng.normal(size=len(V))
+    assert np.allclose(fits.matrix @ (2 * A - B), 2 * (fits.matrix @ A) - fits.matrix @ B)
+    # a constant field has zero coefficients (the pin carries it)
+    assert np.abs(fits.matrix @ np.full(len(V), 3.0)).max() < 1e-12
+
+
+def test_rings_do_not_depend_on_the_face_order_or_the_star_start():
+    V, F = P.suzanne()
+    _, _, _, r = _setup(V, F)
+    rng = np.random.default_rng(3)
+    perm = rng.permutation(len(F))
+    F2 = [list(np.roll(F[i], rng.integers(len(F[i])))) for i in perm]
+    _, _, _, r2 = _setup(V, F2)
+
+    def as_sets(rr, v):
+        a, b = rr.offsets[v], rr.offsets[v + 1]
+        d = np.hypot(rr.y[a:b, 0], rr.y[a:b, 1])   # rotation-invariant
+        return sorted(zip(rr.ids[a:b].tolist(), rr.ring[a:b].tolist(), np.round(d, 9).tolist()))
+    for v in range(len(V)):
+        assert as_sets(r, v) == as_sets(r2, v)
+
+
+def test_cube_corner_unfoldings_are_separate_data():
+    # the opposite corner of a cube is reached through its three faces, each unfolded
+    # across either of its two edges with the star: six data, all far from the vertex
+    # (a mean of them would sit at the vertex itself and wreck the fit)
+    V = np.array([(x, y, z) for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
+    F = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
+    *_, r = _setup(V, F)
+    a, b = r.offsets[0], r.offsets[1]
+    far = r.ids[a:b] == 7
+    assert far.sum() == 6 and np.all(np.hypot(*r.y[a:b][far].T) > 2.0)
+
+
+def test_smoothest_minimiser_is_rotation_invariant():
+    # a degenerate data set (collinear points): the fit must not depend on the chart rotation
+    t = np.linspace(-1, 1, 7)
+    pts = np.stack([t, 0.3 * t], 1)
+    vals = 0.5 * t - 0.2 * t ** 2
+    outs = []
+    for ang in (0.0, 0.7, 2.1):
+        R = np.array([[np.cos(ang), -np.sin(ang)], [np.sin(ang), np.cos(ang)]])
+        y = pts @ R.T
+        B = monomials(y, 2)[0]
+        c = pinned_normal_inverse((B.T @ B)[None], 2)[0] @ (B.T @ vals)
+        probe = np.array([[0.3, 0.5], [-0.4, 0.2]]) @ R.T
+        outs.append(monomials(probe, 2)[0] @ c)
+    assert np.allclose(outs[0], outs[1], atol=1e-10) and np.allclose(outs[0], outs[2], atol=1e-10)
+
+
+def test_bending_gram_is_rotation_invariant_and_definite():
+    for d in (2, 3, 4):
+        G = bending_gram(d)
+        assert np.all(np.linalg.eigvalsh(G) > 0)
+        assert np.isclose(G[2, 2], 4 * np.pi)     # int over the disc of |D^2 x^2|^2
+        ang = 0.9
+        R = np.array([[np.cos(ang), -np.sin(ang)], [np.sin(ang), np.cos(ang)]])
+        # the rotated monomial basis spans the same space: the Gram's invariants agree
+        y = np.random.default_rng(0).normal(size=(60, 2))
+        A = np.linalg.lstsq(monomials(y, d)[0], monomials(y @ R.T, d)[0], rcond=None)[0]
+        assert np.allclose(np.sort(np.linalg.eigvalsh(A.T @ G @ A)), np.sort(np.linalg.eigvalsh(G)),
+                           rtol=1e-8)
