@@ -22,15 +22,16 @@ i.e. on the knot interval [t_j, t_{j+1}] (w = (theta - t_j) / (t_{j+1} - t_j))
 
 A local function is a straight line (b = 0, a = 1/q: its gauge |y| u_j is
 LINEAR in y) or a constant radius (a = 0). Three certified constructions
-(:mod:`gerbs_core.gauge._envelope_build`); the first that exists is kept (``method``):
+(:mod:`gerbs_core.gauge.blend`, :mod:`gerbs_core.gauge.fallbacks`); the first that exists
+is kept (``method``):
 
 * ``"blend"`` (default): the edges' own lines, pulled in by c in [kappa, 1],
   blended DIRECTLY across each corner by one GERBS transition as wide as the
   certified bound allows (up to half of each adjacent edge; collinear edges
   merged). Widest transitions: on the test meshes max |U + U''|/U 3.7-12 where
   the fillets gave 4.7-80. Certified by rigorous bounds
-  (:func:`~gerbs_core.gauge._envelope_build.closed_form_fit`,
-  :func:`~gerbs_core.gauge._envelope_build.blend_check`), not by the argument below;
+  (:func:`~gerbs_core.gauge.blend.closed_form_fit`,
+  :func:`~gerbs_core.gauge.blend.blend_check`), not by the argument below;
 * ``"fillet"``: exact edge lines, each corner rounded by an inscribed arc
   (knots on the rays of arc points; chords / tangents as local lines);
 * ``"constant"``: DESIGN's rule (knots at the corners, bisection while
@@ -54,11 +55,11 @@ import math
 
 import numpy as np
 
-from ._envelope_build import (build_blend, build_constant, build_fillet, interval_ratios,
-                              line_through)
+from .blend import build_blend_many
+from .fallbacks import build_constant, build_fillet, interval_ratios, line_through
 from ..errors import InvalidParameterError, InvalidPointSetError
 
-__all__ = ["RadialEnvelope"]
+__all__ = ["RadialEnvelope", "EnvelopeTable"]
 
 TWO_PI = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
@@ -104,12 +105,41 @@ class RadialEnvelope:
     Attributes: ``theta``, ``radius``, ``normal`` (K,), ``dist`` (K,),
     ``span``, ``closed``, ``kappa``, ``shrink``, ``exact``, ``kernel``,
     ``knots`` (n+1,), ``line_m``, ``line_a``, ``line_b`` (n+1,) (local
-    functions, shrink included), ``method`` ("fillet", "constant" or
+    functions, shrink included), ``method`` ("blend", "fillet", "constant" or
     "exact"), ``min_ratio`` (certified min of rho~/rho).
     """
 
     def __init__(self, theta, radius, closed=True, kappa=0.8, shrink=0.95, kernel=None,
                  exact=False):
+        self._setup(theta, radius, closed, kappa, shrink, kernel, exact)
+        if self.exact:
+            self._finish_exact()
+        else:
+            self._finish_smooth(build_blend_many([self._blend_input()], self.kappa,
+                                                 self.kernel)[0])
+
+    @classmethod
+    def many(cls, stars, closed, kappa=0.8, shrink=0.95, kernel=None, exact=False):
+        """Envelopes of many stars at once (the same as one :class:`RadialEnvelope` each,
+        bitwise): ``stars`` a sequence of (theta, radius) pairs, ``closed`` a bool per star.
+        The corner fits of all stars run as one vectorized pass."""
+        out = []
+        for (theta, radius), cl in zip(stars, closed):
+            env = cls.__new__(cls)
+            env._setup(theta, radius, cl, kappa, shrink, kernel, exact)
+            out.append(env)
+        if exact:
+            for env in out:
+                env._finish_exact()
+            return out
+        blends = build_blend_many([env._blend_input() for env in out],
+                                  out[0].kappa if out else kappa, out[0].kernel if out else None)
+        for env, bl in zip(out, blends):
+            env._finish_smooth(bl)
+        return out
+
+    def _setup(self, theta, radius, closed, kappa, shrink, kernel, exact):
+        """Validation and the exact radius's pieces (normal, dist)."""
         theta = np.array(theta, dtype=np.float64).reshape(-1)
         radius = np.array(radius, dtype=np.float64).reshape(-1)
         if theta.shape != radius.shape:
@@ -137,20 +167,25 @@ class RadialEnvelope:
         bad = np.flatnonzero(~(q > _RTOL * np.maximum(r0, r1)))
         if bad.size:
             raise InvalidPointSetError(
-                "the centre lies on (the line of) a boundary edge; ring indices", 
+                "the centre lies on (the line of) a boundary edge; ring indices",
                 np.unique(np.concatenate([bad, bad + 1])))
-        if self.exact:
-            self.knots = theta.copy()
-            self.line_m = np.append(self.normal, self.normal[-1])
-            self.line_a = 1.0 / (np.append(q, q[-1]) * self.shrink)
-            self.line_b = np.zeros_like(self.line_a)
-            self.min_ratio = self.shrink
-            self.method = "exact"
-        else:
-            self._build_smooth()
+        self._curv = None
+
+    def _blend_input(self):
+        return self.theta, self.normal, self.dist, self.closed, self.span
+
+    def _freeze(self):
         for a in ("knots", "line_m", "line_a", "line_b", "normal", "dist"):
             getattr(self, a).setflags(write=False)
-        self._curv = None
+
+    def _finish_exact(self):
+        self.knots = self.theta.copy()
+        self.line_m = np.append(self.normal, self.normal[-1])
+        self.line_a = 1.0 / (np.append(self.dist, self.dist[-1]) * self.shrink)
+        self.line_b = np.zeros_like(self.line_a)
+        self.min_ratio = self.shrink
+        self.method = "exact"
+        self._freeze()
 
     # ------------------------------------------------------------------ build
     @classmethod
@@ -215,20 +250,18 @@ class RadialEnvelope:
             r = np.append(r, r[0])
         return cls(theta, r, closed=closed, **kwargs)
 
-    def _build_smooth(self):
-        """Build the certified constructions (see :mod:`._envelope_build`) and keep
-        the first that exists in the order "blend", "fillet", "constant" (the
-        blend, when certified, has the widest transitions; the others are kept
-        as fallbacks: the one with smaller max |U + U''| / U, measured on 16
-        samples per knot interval)."""
-        bl = build_blend(self.theta, self.normal, self.dist, self.closed, self.span,
-                         self.kappa, self.kernel)
+    def _finish_smooth(self, bl):
+        """Keep the certified construction ``bl`` of :mod:`.blend` (the widest
+        transitions) if it exists, else the better of the fallbacks of
+        :mod:`.fallbacks` (smaller max |U + U''| / U, measured on 16 samples per knot
+        interval)."""
         if bl is not None:
             kn, m, a, b, rmin, rmax = bl
             if 1.0 / rmin <= 1.0 + 1e-9 and 1.0 / rmax >= self.kappa * (1.0 - 1e-9):
                 self.method, self.knots, self.line_m = "blend", kn, m
                 self.line_a, self.line_b = a / self.shrink, b / self.shrink
                 self.min_ratio = self.shrink / rmax
+                self._freeze()
                 return
         period = self.span if self.closed else None
         cands = []
@@ -255,6 +288,7 @@ class RadialEnvelope:
         self.line_a = a / self.shrink
         self.line_b = b / self.shrink
         self.min_ratio = self.shrink * worst
+        self._freeze()
 
     # ------------------------------------------------------------- evaluation
     def _reduce(self, theta, start=None):
@@ -349,26 +383,33 @@ class RadialEnvelope:
 
 
 def _eval_u(x, t, m, A, B, kernel, nmax, exact):
-    """GERBS spline u~ = sum_j G_j u_j (eq. (3)) and its derivatives at x.
-
-    On [t_j, t_j+1]: u~ = u_j + F(w) (u_j+1 - u_j), w = (x - t_j)/h_j, and by
-    Leibniz u~^(nu) = u_j^(nu) + sum_i C(nu,i) F^(i)(w) h^-i D^(nu-i).
-    Local functions u_j = A_j cos(x - m_j) + B_j. ``exact``: no blending.
-    """
+    """GERBS spline u~ = sum_j G_j u_j (eq. (3)) and its derivatives at x (one envelope:
+    knots t, local functions u_j = A_j cos(x - m_j) + B_j). ``exact``: no blending."""
     j = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
+    return _eval_pieces(x, t[j], t[j + 1], m[j], m[j + 1], A[j], A[j + 1], B[j], B[j + 1],
+                        kernel, nmax, exact)
+
+
+def _eval_pieces(x, t0, t1, m0, m1, A0, A1, B0, B1, kernel, nmax, exact):
+    """u~ and its derivatives at x on the knot intervals [t0, t1] (all arrays of x's shape),
+    the local functions u_0 = A0 cos(x - m0) + B0 and u_1 likewise.
+
+    u~ = u_0 + F(w) (u_1 - u_0), w = (x - t0)/h, and by Leibniz
+    u~^(nu) = u_0^(nu) + sum_i C(nu,i) F^(i)(w) h^-i D^(nu-i), D = u_1 - u_0.
+    """
     out = np.empty((nmax + 1,) + x.shape)
     phase = [i * _HALF_PI for i in range(nmax + 1)]
-    a = [A[j] * np.cos(x - m[j] + ph) for ph in phase]
-    a[0] = a[0] + B[j]
+    a = [A0 * np.cos(x - m0 + ph) for ph in phase]
+    a[0] = a[0] + B0
     if exact:
         out[:] = a
         return out
-    h = t[j + 1] - t[j]
+    h = t1 - t0
     # (1-d input: some kernels mishandle 0-d arrays)
-    w = np.atleast_1d((x - t[j]) / h)
+    w = np.atleast_1d((x - t0) / h)
     F = kernel.cdf_derivs(w, nmax).reshape((nmax + 1,) + x.shape)
-    D = [A[j + 1] * np.cos(x - m[j + 1] + ph) - ai for ph, ai in zip(phase, a)]
-    D[0] = D[0] + B[j + 1]
+    D = [A1 * np.cos(x - m1 + ph) - ai for ph, ai in zip(phase, a)]
+    D[0] = D[0] + B1
     hinv = 1.0 / h
     for nu in range(nmax + 1):
         acc = a[nu].copy()
@@ -378,6 +419,63 @@ def _eval_u(x, t, m, A, B, kernel, nmax, exact):
             hp = hp * hinv
         out[nu] = acc
     return out
+
+
+class EnvelopeTable:
+    """Many :class:`RadialEnvelope` packed into padded arrays, evaluated in one vectorized
+    pass (the same numbers as each envelope's :meth:`RadialEnvelope.u_derivs`).
+
+    Attributes (E envelopes, K the most knots): ``knots`` (E, K) padded with +inf,
+    ``n_knots`` (E,), ``line_m``, ``line_a``, ``line_b`` (E, K), ``closed`` (E,),
+    ``span`` (E,), ``first`` / ``last`` (E,) the sector's end angles (open envelopes are
+    evaluated inside them), ``exact`` and ``kernel`` (shared by all).
+    """
+
+    def __init__(self, envelopes):
+        envelopes = list(envelopes)
+        if not envelopes:
+            raise InvalidParameterError("envelopes", "need at least one envelope")
+        E = len(envelopes)
+        K = max(len(e.knots) for e in envelopes)
+        self.knots = np.full((E, K), np.inf)
+        self.line_m, self.line_a, self.line_b = (np.zeros((E, K)) for _ in range(3))
+        self.n_knots = np.array([len(e.knots) for e in envelopes], dtype=np.int64)
+        for i, e in enumerate(envelopes):
+            n = len(e.knots)
+            self.knots[i, :n] = e.knots
+            self.line_m[i, :n], self.line_a[i, :n], self.line_b[i, :n] = \
+                e.line_m, e.line_a, e.line_b
+        self.closed = np.array([e.closed for e in envelopes])
+        self.span = np.array([e.span for e in envelopes])
+        self.first = np.array([e.theta[0] for e in envelopes])
+        self.last = np.array([e.theta[-1] for e in envelopes])
+        self.exact = envelopes[0].exact
+        self.kernel = envelopes[0].kernel
+        for a in ("knots", "line_m", "line_a", "line_b", "n_knots", "closed", "span",
+                  "first", "last"):
+            getattr(self, a).setflags(write=False)
+
+    def u_derivs(self, env, theta, nmax=2):
+        """u~ and its derivatives (nmax+1, *theta.shape) of envelope ``env[i]`` at
+        ``theta[i]`` (env an int array broadcastable to theta). Closed envelopes are
+        periodic; open ones are evaluated at theta clipped to their sector (round-off of
+        the unfolded angle must not extrapolate the end lines)."""
+        theta = np.asarray(theta, dtype=np.float64)
+        env = np.broadcast_to(np.asarray(env, dtype=np.int64), theta.shape).ravel()
+        x = theta.ravel()
+        kn = self.knots[env]                                        # (N, K)
+        t0 = kn[:, 0]
+        x = np.where(self.closed[env], t0 + np.mod(x - t0, self.span[env]),
+                     np.clip(x, self.first[env], self.last[env]))
+        j = np.clip((kn <= x[:, None]).sum(axis=1) - 1, 0, self.n_knots[env] - 2)
+        j1 = j + 1
+        out = _eval_pieces(x, kn[np.arange(len(x)), j], kn[np.arange(len(x)), j1],
+                           self.line_m[env, j], self.line_m[env, j1],
+                           self.line_a[env, j], self.line_a[env, j1],
+                           self.line_b[env, j], self.line_b[env, j1],
+                           self.kernel, nmax, self.exact)
+        return out.reshape((nmax + 1,) + theta.shape)
+
 
 def _reciprocal_derivs(u):
     """Derivatives of 1/u from those of u (orders 0..3), stacked like ``u``."""

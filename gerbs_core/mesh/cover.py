@@ -105,27 +105,23 @@ def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95,
     Stars of the same shape up to rotation share one object.
     """
     from ..gauge.envelope import RadialEnvelope
-    cache, envs = {}, []
+    index, keys = {}, []          # key -> envelope number; the keys in order
     corner_env = np.full(topo.n_corners, -1, dtype=np.int64)
     env_offset = np.zeros(topo.n_corners)
     so = topo.star_offsets
     th_l, r_l, sig = far_corner_polar(topo, charts, corners2d)
     settings = (float(kappa), float(shrink), bool(exact), kernel)
+    todo = {}                     # key -> (theta, radius) of the stars not memoized
 
     def get(sigs, closed, make):
         key = (closed, settings, tuple(sigs))
-        j = cache.get(key)
+        j = index.get(key)
         if j is None:
-            env = _ENVELOPE_CACHE.get(key)
-            if env is None:
+            if key not in _ENVELOPE_CACHE:
                 th, r = make()
-                env = RadialEnvelope(th - th[0], r, closed=closed, kappa=kappa, shrink=shrink,
-                                     kernel=kernel, exact=exact)
-                if len(_ENVELOPE_CACHE) >= _ENVELOPE_CACHE_SIZE:
-                    _ENVELOPE_CACHE.pop(next(iter(_ENVELOPE_CACHE)))
-                _ENVELOPE_CACHE[key] = env
-            envs.append(env)
-            j = cache[key] = len(envs) - 1
+                todo[key] = (th - th[0], r)
+            j = index[key] = len(keys)
+            keys.append(key)
         return j
 
     def chain(star):
@@ -158,59 +154,54 @@ def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95,
         e = get(sigs, False, lambda: chain(star))
         corner_env[star] = e
         env_offset[star] = th_l[star[0]][0]
+    # the new star shapes in one batch (the corner fits vectorized over all of them)
+    made = RadialEnvelope.many(list(todo.values()), [k[0] for k in todo], kappa=kappa,
+                               shrink=shrink, kernel=kernel, exact=exact)
+    fresh = dict(zip(todo, made))
+    envs = [fresh[k] if k in fresh else _ENVELOPE_CACHE[k] for k in keys]
+    for key, env in fresh.items():
+        if len(_ENVELOPE_CACHE) >= _ENVELOPE_CACHE_SIZE:
+            _ENVELOPE_CACHE.pop(next(iter(_ENVELOPE_CACHE)))
+        _ENVELOPE_CACHE[key] = env
     return envs, corner_env, env_offset
 
 
-def eval_envelopes(envelopes, corner_env, env_offset, corners: np.ndarray, theta: np.ndarray,
+def eval_envelopes(table, corner_env, env_offset, corners: np.ndarray, theta: np.ndarray,
                    nu: int):
     """[u~, u~', u~''] (up to nu), u~ = 1/rho~, of the envelope serving each corner.
 
-    theta (..., P): unfolded angles (chart of the corner's vertex); corners either
-    of theta's shape or of shape theta.shape[:-1] (one corner per row of P
-    samples: grouping then works on rows, cheaply).
+    table: :class:`gerbs_core.gauge.envelope.EnvelopeTable` of the cover's envelopes;
+    theta (..., P): unfolded angles (chart of the corner's vertex); corners either of
+    theta's shape, or broadcastable against it, or of shape theta.shape[:-1] (one corner
+    per row of P samples).
     """
     theta = np.asarray(theta, dtype=np.float64)
     corners = np.asarray(corners)
-    if corners.shape == theta.shape:
-        rows_c, th2 = corners.reshape(-1, 1), theta.reshape(-1, 1)
-    else:
-        rows_c, th2 = corners.reshape(-1), theta.reshape(-1, theta.shape[-1])
-        rows_c = rows_c[:, None]
-    rows_c = rows_c[:, 0]
-    out = np.empty((nu + 1,) + th2.shape)
-    e = corner_env[rows_c]
-    order = np.argsort(e, kind="stable")
-    es = e[order]
-    cut = np.flatnonzero(np.diff(es)) + 1
-    for a, b in zip(np.concatenate([[0], cut]), np.concatenate([cut, [len(es)]])):
-        idx = order[a:b]
-        env = envelopes[es[a]]
-        ti = th2[idx] - env_offset[rows_c[idx]][:, None]
-        if not env.closed:
-            # stay inside [theta_0, theta_K] (round-off of the unfolded angle; outside,
-            # the end lines would be extrapolated)
-            ti = np.clip(ti, env.theta[0], env.theta[-1])
-        out[:, idx] = env.u_derivs(ti, nu)
-    return [out[k].reshape(theta.shape) for k in range(nu + 1)]
+    if corners.ndim and corners.shape == theta.shape[:-1]:
+        corners = corners[..., None]        # one corner per row of samples
+    u = table.u_derivs(corner_env[corners], theta - env_offset[corners], nu)
+    return [u[k] for k in range(nu + 1)]
 
 
 class StarCover:
     """The size functions psi_v of all vertices (immutable).
 
-    ``envelopes`` (list of RadialEnvelope), ``corner_env`` (C,) the envelope serving
-    each corner's sector, ``env_offset`` (C,) its angle offset, ``kernel`` the GERBS
-    kernel of the bumps.
+    ``envelopes`` (list of RadialEnvelope) and ``table`` (the same packed for vectorized
+    evaluation), ``corner_env`` (C,) the envelope serving each corner's sector,
+    ``env_offset`` (C,) its angle offset, ``kernel`` the GERBS kernel of the bumps.
     """
 
     def __init__(self, envelopes, corner_env, env_offset, kernel):
+        from ..gauge.envelope import EnvelopeTable
         self.envelopes = tuple(envelopes)
+        self.table = EnvelopeTable(self.envelopes)
         corner_env.flags.writeable = False
         env_offset.flags.writeable = False
         self.corner_env, self.env_offset, self.kernel = corner_env, env_offset, kernel
 
     def reciprocal_radius(self, corners, theta, nu: int):
         """[u~, u~', u~''] (u~ = 1 / rho~) of each corner's envelope at unfolded angles theta."""
-        return eval_envelopes(self.envelopes, self.corner_env, self.env_offset, corners, theta, nu)
+        return eval_envelopes(self.table, self.corner_env, self.env_offset, corners, theta, nu)
 
     def psi_jet(self, charts, corners, x, nu: int, pol=None):
         """Jet of psi_v = b(r u~(theta)) at face points x (..., 2) of the corners' faces

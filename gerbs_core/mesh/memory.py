@@ -27,4 +27,4 @@ def memory_estimate(model, resolution: int) -> int:
     n_avg = float(np.mean(topo.face_sizes))
     nnz = n_avg * (1.0 + m_avg)
     return int(P * (BYTES_PER_SAMPLE + BYTES_PER_NNZ * nnz) + CHUNK_BYTES
-               + BYTES_PER_NNZ * model.operator.nnz)
+               + BYTES_PER_NNZ * model.fits.nnz_estimate)

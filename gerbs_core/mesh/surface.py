@@ -67,8 +67,9 @@ class SurfaceModel:
     """Everything of a surface that is fixed by the topology, the rest shape and the
     settings (built once; shared by every surface made with :meth:`BlendingSurface.with_positions`).
 
-    degrees (V,) the local functions' degrees; operator (V MMAX, V) their coefficients
-    as a linear map of the positions (:func:`gerbs_core.mesh.agreement.fair_fits`).
+    degrees (V,) the local functions' degrees; fits their coefficients as a linear map of
+    the positions (:class:`gerbs_core.mesh.coupling.CoupledFits`: ``fits(X)``, and the
+    explicit ``operator`` (V MMAX, V), made on first use).
     """
 
     topology: MeshTopology
@@ -76,8 +77,13 @@ class SurfaceModel:
     charts: object
     cover: object
     degrees: np.ndarray
-    operator: object
+    fits: object
     boundary: str
+
+    @property
+    def operator(self):
+        """The coefficients' operator (V MMAX, V) (csr; made on first use)."""
+        return self.fits.operator
 
     @property
     def max_degree(self) -> int:
@@ -150,9 +156,9 @@ class BlendingSurface:
         charts = vertex_charts(topo, layouts.corners, layouts.angles, boundary)
         cover = star_cover(topo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge)
         rings = data_rings(topo, charts, layouts.corners)
-        degrees, operator = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
+        degrees, fits = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
         degrees.flags.writeable = False
-        self.model = SurfaceModel(topo, layouts, charts, cover, degrees, operator, boundary)
+        self.model = SurfaceModel(topo, layouts, charts, cover, degrees, fits, boundary)
         self._X = X
         self._X.flags.writeable = False
         self._coef = self._coefficients(X)
@@ -169,7 +175,7 @@ class BlendingSurface:
     def _coefficients(self, X):
         """(V, MMAX, 3) coefficients of the local functions for positions X; with Hermite
         normals the linear part is projected onto the planes orthogonal to them."""
-        C = np.stack([self.model.operator @ X[:, k] for k in range(3)], -1).reshape(-1, MMAX, 3)
+        C = self.model.fits(X).reshape(-1, MMAX, 3)
         if self._normals is not None:
             n = self._normals
             C[:, :2] -= np.einsum("vmk,vk->vm", C[:, :2], n)[..., None] * n[:, None, :]
@@ -352,4 +358,4 @@ class BlendingSurface:
         lat = self.lattice(resolution)
         base, mono, eps = assemble(self.model, lat)
         self._require_cover(eps)
-        return Stencil(base, mono, self.model.operator, lat)
+        return Stencil(base, mono, self.model.fits, lat)
