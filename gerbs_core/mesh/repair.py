@@ -148,6 +148,19 @@ def _warning(tag, indices, element, detail=None):
     return MeshWarning(tag, text, idx, element, edges)
 
 
+def _combined(notes):
+    """One note per tag (indices and edge pairs joined), in the order of ``ORDER``."""
+    out = []
+    for tag in ORDER:
+        mine = [n for n in notes if n[0] == tag]
+        if mine:
+            edges = [np.asarray(n[3]).reshape(-1, 2) for n in mine
+                     if n[3] is not None and not isinstance(n[3], str)]
+            out.append((tag, np.concatenate([np.asarray(n[1]).ravel() for n in mine]),
+                        mine[0][2], np.unique(np.concatenate(edges), axis=0) if edges else None))
+    return out
+
+
 def _parse(X, faces):
     if isinstance(faces, MeshTopology):
         if faces.n_vertices != len(X):
@@ -262,7 +275,7 @@ def repair_mesh(vertices, faces, *, merge_distance=None, rest_positions=None,
     seams = _open_seams(G[vmap], vmap, sizes, new_flat, partner)
     if seams is not None:
         notes.append(("open_seam", seams[0], "vertex", seams[1]))
-    notes.sort(key=lambda n: ORDER.index(n[0]))
+    notes = _combined(notes)
     changed = bool(len(vmap) != V or len(sizes) != len(sizes0) or not np.array_equal(
         new_flat, flat0))
     if not changed and isinstance(faces, MeshTopology):
