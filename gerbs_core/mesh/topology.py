@@ -4,7 +4,8 @@
 (F,k) int array; triangles, quads, n-gons, mixed; boundaries allowed) and is
 immutable. It validates the mesh as an oriented 2-manifold with boundary and
 raises :class:`~gerbs_core.errors.InvalidMeshError` otherwise (problem tags
-below). :func:`gerbs_core.mesh.validation.validate_geometry` checks vertex
+below). :class:`~gerbs_core.mesh.surface.BlendingSurface` repairs all of them except
+``bad_shape``, ``empty`` and ``index_out_of_range`` first (:mod:`gerbs_core.mesh.repair`). :func:`gerbs_core.mesh.validation.validate_geometry` checks vertex
 positions against a topology.
 
 Conventions (all arrays int64, read-only):
