@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["CONVEX_SCALE", "adaptive_scales", "blend_check", "closed_form_fit",
+__all__ = ["CONVEX_SCALE", "CREASE_SCALE", "adaptive_scales", "blend_check", "closed_form_fit",
            "fit_blend_widths", "overshoot_profile", "build_blend", "build_blend_many"]
 
 _BLEND_SAMPLES = 24       # sub-intervals per side in blend_check
@@ -26,6 +26,11 @@ CONVEX_SCALE = 0.9        # c of a line next to a convex corner (adaptive: the f
 
 
 _C_MAX = 0.97             # adaptive c of a convex-cornered line stays <= this
+
+# c of the end lines of an open star whose end ray is a cut crease
+# (:mod:`gerbs_core.mesh.creases`): fixed, so that the two sides of the crease see the same
+# rho~ = shrink c |ab| on it (the adaptive c depends on the far edges of each side)
+CREASE_SCALE = CONVEX_SCALE
 
 
 def adaptive_scales(n_edges, ea, eb, nA, pA, nB, pB, roomA, roomB, kappa, kernel):
@@ -309,11 +314,26 @@ def _assemble(s, c, wa, wb, kappa):
     return kn, mm, 1.0 / cc, np.zeros_like(cc), rmin, rmax
 
 
+def _fix_end_scales(c, stars, poff, kappa):
+    """c of the first / last super-piece := max(CREASE_SCALE, kappa) for open stars whose
+    start / end ray is marked (the optional 6th item of a star: (start, end) bools)."""
+    fix = max(CREASE_SCALE, kappa)
+    for j, st in enumerate(stars):
+        if len(st) > 5 and not st[3]:
+            start, end = st[5]
+            if start:
+                c[poff[j]] = fix
+            if end:
+                c[poff[j + 1] - 1] = fix
+
+
 def build_blend_many(stars, kappa, kernel):
-    """:func:`build_blend` for a sequence of stars (theta, normal, dist, closed, span):
-    a list of results (each a tuple or None), the corner fits done once for all."""
-    prep = [_star_corners(np.asarray(t, float), np.asarray(n, float), np.asarray(d, float),
-                          bool(cl), float(sp)) for t, n, d, cl, sp in stars]
+    """:func:`build_blend` for a sequence of stars (theta, normal, dist, closed, span[,
+    fixed]): a list of results (each a tuple or None), the corner fits done once for all.
+    fixed (open stars): (start, end) bools, end lines whose scale c is fixed to
+    max(CREASE_SCALE, kappa) (crease rays)."""
+    prep = [_star_corners(np.asarray(st[0], float), np.asarray(st[1], float),
+                          np.asarray(st[2], float), bool(st[3]), float(st[4])) for st in stars]
     live = [s for s in prep if s is not None]
     out = [None] * len(prep)
     if not live:
@@ -328,6 +348,7 @@ def build_blend_many(stars, kappa, kernel):
     sp = cat["sp"]
     c = adaptive_scales(int(poff[-1]), pj, cj, cat["nA"], sp[pj], cat["nB"], sp[cj],
                         cat["roomA"], cat["roomB"], kappa, kernel)
+    _fix_end_scales(c, [st for st, s in zip(stars, prep) if s is not None], poff, kappa)
     wa, wb, ok, _, _ = fit_blend_widths(cat["nA"], sp[pj], c[pj], cat["nB"], sp[cj], c[cj],
                                         cat["roomA"], cat["roomB"], kappa, kernel)
     j = 0

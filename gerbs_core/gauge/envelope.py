@@ -101,6 +101,10 @@ class RadialEnvelope:
     exact : bool
         If True, rho~ = shrink * rho exactly (kinked: for tests that must
         detect kinks).
+    fixed_ends : (bool, bool)
+        Open stars: the first / last line's pull-in scale is fixed
+        (:data:`~gerbs_core.gauge.blend.CREASE_SCALE`) instead of adaptive, so
+        rho~ on that end ray depends only on its length (crease rays).
 
     Attributes: ``theta``, ``radius``, ``normal`` (K,), ``dist`` (K,),
     ``span``, ``closed``, ``kappa``, ``shrink``, ``exact``, ``kernel``,
@@ -110,8 +114,8 @@ class RadialEnvelope:
     """
 
     def __init__(self, theta, radius, closed=True, kappa=0.8, shrink=0.95, kernel=None,
-                 exact=False):
-        self._setup(theta, radius, closed, kappa, shrink, kernel, exact)
+                 exact=False, fixed_ends=(False, False)):
+        self._setup(theta, radius, closed, kappa, shrink, kernel, exact, fixed_ends)
         if self.exact:
             self._finish_exact()
         else:
@@ -119,14 +123,17 @@ class RadialEnvelope:
                                                  self.kernel)[0])
 
     @classmethod
-    def many(cls, stars, closed, kappa=0.8, shrink=0.95, kernel=None, exact=False):
+    def many(cls, stars, closed, kappa=0.8, shrink=0.95, kernel=None, exact=False,
+             fixed_ends=None):
         """Envelopes of many stars at once (the same as one :class:`RadialEnvelope` each,
-        bitwise): ``stars`` a sequence of (theta, radius) pairs, ``closed`` a bool per star.
-        The corner fits of all stars run as one vectorized pass."""
+        bitwise): ``stars`` a sequence of (theta, radius) pairs, ``closed`` a bool per star,
+        ``fixed_ends`` optional (start, end) per star. The corner fits of all stars run as
+        one vectorized pass."""
         out = []
-        for (theta, radius), cl in zip(stars, closed):
+        fixed_ends = [(False, False)] * len(closed) if fixed_ends is None else fixed_ends
+        for (theta, radius), cl, fx in zip(stars, closed, fixed_ends):
             env = cls.__new__(cls)
-            env._setup(theta, radius, cl, kappa, shrink, kernel, exact)
+            env._setup(theta, radius, cl, kappa, shrink, kernel, exact, fx)
             out.append(env)
         if exact:
             for env in out:
@@ -138,8 +145,10 @@ class RadialEnvelope:
             env._finish_smooth(bl)
         return out
 
-    def _setup(self, theta, radius, closed, kappa, shrink, kernel, exact):
+    def _setup(self, theta, radius, closed, kappa, shrink, kernel, exact,
+               fixed_ends=(False, False)):
         """Validation and the exact radius's pieces (normal, dist)."""
+        self.fixed_ends = (bool(fixed_ends[0]), bool(fixed_ends[1]))
         theta = np.array(theta, dtype=np.float64).reshape(-1)
         radius = np.array(radius, dtype=np.float64).reshape(-1)
         if theta.shape != radius.shape:
@@ -172,7 +181,7 @@ class RadialEnvelope:
         self._curv = None
 
     def _blend_input(self):
-        return self.theta, self.normal, self.dist, self.closed, self.span
+        return self.theta, self.normal, self.dist, self.closed, self.span, self.fixed_ends
 
     def _freeze(self):
         for a in ("knots", "line_m", "line_a", "line_b", "normal", "dist"):

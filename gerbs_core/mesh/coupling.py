@@ -28,7 +28,7 @@ import scipy.sparse as sp
 from .fits import pinned_normal_inverse
 from .monomials import monomial_exponents, n_monomials
 
-__all__ = ["CoupledFits", "coupled_fits", "identity_fits"]
+__all__ = ["CoupledFits", "CopiedFits", "coupled_fits", "identity_fits"]
 
 
 class CoupledFits:
@@ -40,20 +40,33 @@ class CoupledFits:
     rigidly). Immutable.
     """
 
-    def __init__(self, chosen, sweeps=0, damping=1.0, parts=None):
+    def __init__(self, chosen, sweeps=0, damping=1.0, parts=None, projection=None):
         self.chosen = chosen.tocsr()
         self.sweeps = int(sweeps) if parts is not None else 0
         self.damping = float(damping)
         self._parts = parts
+        self._projection = projection
         self.shape = self.chosen.shape
 
     def __call__(self, X):
         """Coefficients (V MMAX, k) for positions X (V, k) or (V,)."""
         return self._map(np.asarray(X, dtype=np.float64))
 
+    def _project(self, c, Y):
+        """The linear constraints (crease curves, :mod:`gerbs_core.mesh.crease_fits`), if any:
+        c - R (K c - G Y)."""
+        if self._projection is None:
+            return c
+        R, K, G = self._projection
+        c = c - R @ (K @ c - G @ Y)
+        if sp.issparse(c):
+            c = c.tocsr()
+            c.eliminate_zeros()
+        return c
+
     def _map(self, Y):
         """The map applied to Y: a dense (V, k) array, or a sparse (V, V) matrix."""
-        c = self.chosen @ Y
+        c = self._project(self.chosen @ Y, Y)
         if not self.sweeps:
             return c
         p = self._parts
@@ -64,7 +77,7 @@ class CoupledFits:
             l = Xs + p["Bu"] @ c                              # l_v at the rows' samples
             T = p["gather"] @ (p["agg"] @ l)                  # sum of the sample's P l
             new = p["blk"] @ (fixed + p["BsT"] @ (p["Dp"] @ T - p["Dpp"] @ l))
-            c = (1.0 - d) * c + d * new
+            c = self._project((1.0 - d) * c + d * new, Y)
             if sp.issparse(c):
                 c.eliminate_zeros()
         return c
@@ -98,9 +111,38 @@ class CoupledFits:
         return int(self.chosen.nnz * (1.0 + 1.5 * self.sweeps))
 
 
-def identity_fits(chosen) -> CoupledFits:
-    """The chosen data fits alone (no coupling sweeps)."""
-    return CoupledFits(chosen)
+class CopiedFits:
+    """The fits of a cut mesh (:mod:`gerbs_core.mesh.creases`) as a map of the ORIGINAL
+    positions: ``fits(X) = inner(X[copy_of])`` (V' MMAX, k); :attr:`operator` (V' MMAX, V)
+    sums the columns of a vertex's copies. Same interface as :class:`CoupledFits`."""
+
+    def __init__(self, inner, cut):
+        self.inner, self._cut = inner, cut
+        self.shape = (inner.shape[0], cut.original.n_vertices)
+
+    def __call__(self, X):
+        return self.inner(self._cut.positions(np.asarray(X, dtype=np.float64)))
+
+    @cached_property
+    def operator(self) -> sp.csr_matrix:
+        op = (self.inner.operator @ self._cut.copy_matrix).tocsr()
+        op.sum_duplicates()
+        op.eliminate_zeros()
+        return op
+
+    @property
+    def operator_built(self) -> bool:
+        return "operator" in self.__dict__
+
+    @property
+    def nnz_estimate(self) -> int:
+        return int(self.operator.nnz) if self.operator_built else self.inner.nnz_estimate
+
+
+def identity_fits(chosen, projection=None) -> CoupledFits:
+    """The chosen data fits alone (no coupling sweeps), constrained by ``projection``
+    ((R, K, G), :meth:`gerbs_core.mesh.crease_fits.CurveConstraints.projection`) if given."""
+    return CoupledFits(chosen, projection=projection)
 
 
 def _block_diagonal(blocks):
@@ -112,8 +154,11 @@ def _block_diagonal(blocks):
     return sp.csr_matrix((blocks[nz], (r[nz], c[nz])), shape=(V * M, V * M))
 
 
-def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax) -> CoupledFits:
-    """The coupled fits (module docstring).
+def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
+                 constraints=None) -> CoupledFits:
+    """The coupled fits (module docstring), with optional linear ``constraints``
+    (:class:`gerbs_core.mesh.crease_fits.CurveConstraints`) imposed after the first fit and
+    every sweep in the metric of the coupled normal matrices.
 
     chosen, rhs (V MMAX, V): the chosen candidates' coefficient operators and the
     right-hand sides of their scaled normal equations; normals (V, MMAX, MMAX) their
@@ -160,4 +205,5 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax) -> CoupledFi
         "Dp": sp.diags(rule.mu * w * P, format="csr"),
         "Dpp": sp.diags(rule.mu * w * P * P, format="csr"),
     }
-    return CoupledFits(chosen, rule.sweeps, rule.damping, parts)
+    proj = None if constraints is None else constraints.projection(N, h, degrees, mmax)
+    return CoupledFits(chosen, rule.sweeps, rule.damping, parts, proj)

@@ -95,14 +95,15 @@ def clear_envelope_cache() -> None:
 
 
 def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95,
-                    exact=False, kernel=None):
+                    exact=False, kernel=None, fixed_ends=None):
     """Smooth star envelopes (:class:`gerbs_core.gauge.envelope.RadialEnvelope`) of all charts.
 
     Returns (envelopes (list), corner_envelope (C,) int, corner_offset (C,)): the
     envelope serving each corner's sector, evaluated at theta - corner_offset.
     One closed envelope per interior vertex, one open envelope per boundary
     fan (a function of the unfolded angle; only the chart angle is compressed).
-    Stars of the same shape up to rotation share one object.
+    Stars of the same shape up to rotation share one object. fixed_ends (V, 2) bool,
+    optional: boundary fans whose start / end ray is a crease (fixed end-line scales).
     """
     from ..gauge.envelope import RadialEnvelope
     index, keys = {}, []          # key -> envelope number; the keys in order
@@ -113,13 +114,13 @@ def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95,
     settings = (float(kappa), float(shrink), bool(exact), kernel)
     todo = {}                     # key -> (theta, radius) of the stars not memoized
 
-    def get(sigs, closed, make):
-        key = (closed, settings, tuple(sigs))
+    def get(sigs, closed, make, fixed=(False, False)):
+        key = (closed, settings, tuple(sigs)) + ((fixed,) if any(fixed) else ())
         j = index.get(key)
         if j is None:
             if key not in _ENVELOPE_CACHE:
                 th, r = make()
-                todo[key] = (th - th[0], r)
+                todo[key] = (th - th[0], r, fixed)
             j = index[key] = len(keys)
             keys.append(key)
         return j
@@ -151,12 +152,14 @@ def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95,
             corner_env[star] = e
             env_offset[star] = charts.theta0[rot[0]]
             continue
-        e = get(sigs, False, lambda: chain(star))
+        fx = (False, False) if fixed_ends is None else tuple(bool(b) for b in fixed_ends[v])
+        e = get(sigs, False, lambda: chain(star), fx)
         corner_env[star] = e
         env_offset[star] = th_l[star[0]][0]
     # the new star shapes in one batch (the corner fits vectorized over all of them)
-    made = RadialEnvelope.many(list(todo.values()), [k[0] for k in todo], kappa=kappa,
-                               shrink=shrink, kernel=kernel, exact=exact)
+    made = RadialEnvelope.many([t[:2] for t in todo.values()], [k[0] for k in todo],
+                               kappa=kappa, shrink=shrink, kernel=kernel, exact=exact,
+                               fixed_ends=[t[2] for t in todo.values()])
     fresh = dict(zip(todo, made))
     envs = [fresh[k] if k in fresh else _ENVELOPE_CACHE[k] for k in keys]
     for key, env in fresh.items():
@@ -215,10 +218,12 @@ class StarCover:
         return bump_jet(self.kernel, star_gauge_jet(r_jet, t_jet, u, nu), nu), pol
 
 
-def star_cover(topo, charts, corners2d, kernel, kappa=0.8, shrink=0.95, exact=False) -> StarCover:
+def star_cover(topo, charts, corners2d, kernel, kappa=0.8, shrink=0.95, exact=False,
+               fixed_ends=None) -> StarCover:
     """The star cover of a mesh with face layouts corners2d (see the module docstring).
     ``exact``: the exact (kinked) star radius instead of the smooth envelope -- a
-    deliberately non-smooth variant, the control of the smoothness tests."""
+    deliberately non-smooth variant, the control of the smoothness tests. ``fixed_ends``
+    (V, 2): see :func:`build_envelopes`."""
     envs, ce, eo = build_envelopes(topo, charts, corners2d, kappa=kappa, shrink=shrink,
-                                   exact=exact, kernel=kernel)
+                                   exact=exact, kernel=kernel, fixed_ends=fixed_ends)
     return StarCover(envs, ce, eo, kernel)

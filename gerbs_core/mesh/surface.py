@@ -23,10 +23,14 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
-from .agreement import MMAX, FairnessRule, fair_fits
+from .agreement import MMAX, FairnessRule, face_sharpness, fair_fits
 from .charts import BOUNDARY_RULES, vertex_charts
+from .coupling import CopiedFits
 from .cover import require_cover, star_cover
+from .crease_fits import corner_scales, curve_constraints
+from .creases import crease_cut
 from .evaluate import corner_terms, evaluate, groups
+from .lattice import Lattice
 from .layout import face_layouts
 from .memory import memory_estimate
 from .monomials import monomials
@@ -69,7 +73,9 @@ class SurfaceModel:
 
     degrees (V,) the local functions' degrees; fits their coefficients as a linear map of
     the positions (:class:`gerbs_core.mesh.coupling.CoupledFits`: ``fits(X)``, and the
-    explicit ``operator`` (V MMAX, V), made on first use).
+    explicit ``operator`` (V MMAX, V), made on first use). With creases
+    (:class:`gerbs_core.mesh.creases.CreaseCut` ``crease``) ``topology`` is the cut mesh and
+    the per-vertex arrays index its vertex copies (``crease.copy_of``).
     """
 
     topology: MeshTopology
@@ -79,6 +85,7 @@ class SurfaceModel:
     degrees: np.ndarray
     fits: object
     boundary: str
+    crease: object = None
 
     @property
     def operator(self):
@@ -112,6 +119,18 @@ class BlendingSurface:
         the control of the smoothness tests.
     memory_budget : bytes a tessellation or stencil may use (ResourceLimitError beyond).
     eps0_resolution : lattice resolution of the cover-thickness check :attr:`eps0`.
+    creases : optional edge crease weights in [0, 1] (Blender's ``crease_edge``): an (E,)
+        array aligned with ``MeshTopology.edges`` or a mapping {(i, j): w}. A weight of 1
+        cuts the surface along the edge (a crease curve through its vertices, C0 with a
+        normal jump); partial weights make the surface near the edge proportionally
+        tighter (still smooth). :mod:`gerbs_core.mesh.creases`.
+    corners : optional (V,) vertex crease weights in [0, 1] (``crease_vert``): 1 makes a
+        crease chain through the vertex a corner; any weight tightens the surface there.
+
+    With creases the per-vertex arrays (:attr:`degrees`, :attr:`coefficients`,
+    :attr:`charts`, :meth:`local_function`, :meth:`chart_evaluate`) index the vertex
+    copies of the cut mesh (``model.crease.copy_of`` maps them to vertices); outputs
+    (:meth:`tessellate`, :meth:`stencil`, :meth:`lattice`) are on the original mesh.
 
     Raises InvalidMeshError (topology/geometry) or InvalidParameterError; the
     caller's arrays are never modified. Immutable.
@@ -120,7 +139,7 @@ class BlendingSurface:
     def __init__(self, vertices, faces, kernel=None, rest_positions=None, boundary: str = "keep",
                  normals=None, *, fairness: FairnessRule | None = None, kappa: float = 0.8,
                  shrink: float = 0.95, exact_gauge: bool = False, memory_budget: float = 2.0e9,
-                 eps0_resolution: int = 6):
+                 eps0_resolution: int = 6, creases=None, corners=None):
         X = _points("vertices", vertices)
         topo = faces if isinstance(faces, MeshTopology) else MeshTopology(faces, len(X))
         if topo.n_vertices != len(X):
@@ -152,13 +171,13 @@ class BlendingSurface:
                                          closed=True)
         self.kernel = kernel
         self._normals = None if normals is None else self._unit_normals(normals, len(X))
-        layouts = face_layouts(topo, rest)
-        charts = vertex_charts(topo, layouts.corners, layouts.angles, boundary)
-        cover = star_cover(topo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge)
-        rings = data_rings(topo, charts, layouts.corners)
-        degrees, fits = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
-        degrees.flags.writeable = False
-        self.model = SurfaceModel(topo, layouts, charts, cover, degrees, fits, boundary)
+        cut = None
+        if creases is not None or corners is not None:
+            cut = crease_cut(topo, creases, corners)
+            if not (cut.edge_weight.any() or cut.vertex_weight.any()):
+                cut = None
+        self.model = _build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink,
+                                  exact_gauge)
         self._X = X
         self._X.flags.writeable = False
         self._coef = self._coefficients(X)
@@ -172,19 +191,28 @@ class BlendingSurface:
             raise InvalidParameterError("normals", "must be finite and non-zero")
         return nrm / ln[:, None]
 
+    @property
+    def _Xm(self):
+        """Positions of the model's vertices (the copies of the cut mesh with creases)."""
+        cut = self.model.crease
+        return self._X if cut is None else cut.positions(self._X)
+
     def _coefficients(self, X):
         """(V, MMAX, 3) coefficients of the local functions for positions X; with Hermite
         normals the linear part is projected onto the planes orthogonal to them."""
-        C = self.model.fits(X).reshape(-1, MMAX, 3)
+        cut = self.model.crease
+        C = self.model.fits(X if cut is None else cut.positions(X)).reshape(-1, MMAX, 3)
         if self._normals is not None:
-            n = self._normals
+            n = self._normals if cut is None else self._normals[cut.copy_of]
             C[:, :2] -= np.einsum("vmk,vk->vm", C[:, :2], n)[..., None] * n[:, None, :]
         C.flags.writeable = False
         return C
 
     @property
     def topology(self) -> MeshTopology:
-        return self.model.topology
+        """The mesh's topology (with creases: the original, uncut mesh)."""
+        cut = self.model.crease
+        return self.model.topology if cut is None else cut.original
 
     @property
     def layouts(self):
@@ -229,7 +257,7 @@ class BlendingSurface:
         ``eps0_resolution``) of max_v psi_v: the thickness of the cover (Definition 11);
         > 0 means no point is left uncovered."""
         from .lattice import Lattice
-        lat = Lattice(self.topology, self.eps0_resolution)
+        lat = Lattice(self.model.topology, self.eps0_resolution)
         x = lat.map_to_polygon(self.layouts.corners, local=True)
         return self._evaluate(lat.local_face, x, 0)[1]
 
@@ -237,7 +265,7 @@ class BlendingSurface:
         require_cover(eps, self.kernel)
 
     def _evaluate(self, f, x, nu):
-        return evaluate(self.model, self._X, self._coef, f, x, nu)
+        return evaluate(self.model, self._Xm, self._coef, f, x, nu)
 
     # ---------------------------------------------------------------- public
     def _face_points(self, face_index, local_coords):
@@ -277,12 +305,15 @@ class BlendingSurface:
         psi (N, n)) with n the largest face size (padding: vertex -1, values 0); with
         nu = 1 also dPsi (N, n, 2)."""
         f, x, _ = self._face_points(face_index, local_coords)
-        nmax = int(self.topology.face_sizes.max())
+        topo = self.model.topology
+        nmax = int(topo.face_sizes.max())
         verts = np.full((len(f), nmax), -1, dtype=np.int64)
         Ps, ps, dP = np.zeros((len(f), nmax)), np.zeros((len(f), nmax)), np.zeros((len(f), nmax, 2))
-        for n, faces, sel, xb in groups(self.topology, self.layouts.corners, f, x):
+        for n, faces, sel, xb in groups(topo, self.layouts.corners, f, x):
             u, Psi, _, _ = corner_terms(self.model, n, faces, xb, nu, degree=1)
-            cb = self.topology.face_offsets[faces][None, :, None] + np.arange(n)[:, None, None]
+            if self.model.crease is not None:
+                u = self.model.crease.copy_of[u]
+            cb = topo.face_offsets[faces][None, :, None] + np.arange(n)[:, None, None]
             psi = self.model.cover.psi_jet(self.charts, cb, xb[None], 0)[0][0]
             valid = sel >= 0
             s = sel[valid]
@@ -299,7 +330,7 @@ class BlendingSurface:
         d = int(self.degrees[v])
         mm = monomials(y, d, nu)
         C = self._coef[v, :mm[0].shape[-1]]
-        out = [self._X[v] + mm[0] @ C]
+        out = [self._Xm[v] + mm[0] @ C]
         if nu >= 1:
             out.append(np.einsum("pmj,mc->pcj", mm[1], C))
         if nu >= 2:
@@ -331,20 +362,33 @@ class BlendingSurface:
                                      f"{self.memory_budget / 1e6:.0f} MB (memory_budget)")
         return Lattice(self.topology, resolution)
 
+
     def tessellate(self, resolution: int):
         """(points (P,3), triangles (T,3) int, normals (P,3)) at `resolution` segments per edge.
 
         Crack-free (shared edge samples once); normals from the analytic derivatives
         dS/dx1 x dS/dx2 (at mesh vertices from the linear part of l_v).
+        With full creases the two sides of a cut edge are evaluated separately and their
+        samples merged (the same points to rounding); the normals there are the mean of
+        the two sides' (the surface has no tangent plane on a crease).
         """
         lat = self.lattice(resolution)
-        x = lat.map_to_polygon(self.layouts.corners)
-        (S, dS), eps = self._evaluate(lat.face, x, 1)
+        mlat = lat if self.model.crease is None else Lattice(self.model.topology, resolution)
+        x = mlat.map_to_polygon(self.layouts.corners)
+        (S, dS), eps = self._evaluate(mlat.face, x, 1)
         self._require_cover(eps)
         nrm = np.cross(dS[..., 0], dS[..., 1])
-        nrm[lat.vertex_sample] = np.cross(self._coef[:, 0, :], self._coef[:, 1, :])
+        nrm[mlat.vertex_sample] = np.cross(self._coef[:, 0, :], self._coef[:, 1, :])
         ln = np.linalg.norm(nrm, axis=1)
         nrm /= np.where(ln > 0, ln, 1.0)[:, None]
+        if mlat is not lat:
+            m = self.model.crease.sample_map(mlat)
+            S = S[first_occurrence(m, lat.n_points)]
+            merged = np.zeros((lat.n_points, 3))
+            np.add.at(merged, m, nrm)
+            nrm = merged
+            ln = np.linalg.norm(nrm, axis=1)
+            nrm /= np.where(ln > 0, ln, 1.0)[:, None]
         return S, np.array(lat.triangles), nrm
 
     def stencil(self, resolution: int) -> Stencil:
@@ -356,6 +400,44 @@ class BlendingSurface:
                                         "normals the surface is not a linear map of X)")
         from .assembly import assemble
         lat = self.lattice(resolution)
-        base, mono, eps = assemble(self.model, lat)
+        cut = self.model.crease
+        if cut is None:
+            base, mono, eps = assemble(self.model, lat)
+            self._require_cover(eps)
+            return Stencil(base, mono, self.model.fits, lat)
+        mlat = Lattice(self.model.topology, resolution)
+        base, mono, eps = assemble(self.model, mlat)
         self._require_cover(eps)
-        return Stencil(base, mono, self.model.fits, lat)
+        rows = first_occurrence(cut.sample_map(mlat), lat.n_points)
+        # merged crease samples: one row each; columns of vertex copies summed into the vertex
+        return Stencil(base[rows] @ cut.copy_matrix, mono[rows], CopiedFits(self.model.fits, cut),
+                       lat)
+
+
+def first_occurrence(m, n):
+    """(n,) the first index i with m[i] = j, for every j in [0, n) (m covers all of them)."""
+    rep = np.empty(n, dtype=np.int64)
+    rep[m[::-1]] = np.arange(len(m) - 1, -1, -1)
+    return rep
+
+
+def _build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink, exact_gauge):
+    """The SurfaceModel of a topology and rest shape (with creases: of the cut mesh)."""
+    mtopo = topo if cut is None else cut.topology
+    mrest = rest if cut is None else cut.positions(rest)
+    layouts = face_layouts(mtopo, mrest)
+    scale, ends, cons = None, None, None
+    sharp = face_sharpness(topo, rest, fairness.sharp_from, fairness.sharp_to)
+    if cut is not None:
+        sharp = cut.sharpness(sharp)
+        scale = corner_scales(cut, layouts.angles, rest, cut.chart_scales(layouts.angles))
+        ends = cut.crease_ends()
+    charts = vertex_charts(mtopo, layouts.corners, layouts.angles, boundary, scale)
+    cover = star_cover(mtopo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge, ends)
+    rings = data_rings(mtopo, charts, layouts.corners)
+    if cut is not None and cut.any_cut:
+        cons = lambda degrees: curve_constraints(cut, charts, rest, degrees, MMAX)  # noqa: E731
+    degrees, fits = fair_fits(mtopo, charts, layouts.corners, cover, rings, mrest, fairness,
+                              sharp, cons)
+    degrees.flags.writeable = False
+    return SurfaceModel(mtopo, layouts, charts, cover, degrees, fits, boundary, cut)
