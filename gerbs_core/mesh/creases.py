@@ -10,11 +10,12 @@ Blender-style crease weights (edge creases w_e in [0, 1], vertex creases w_v in
   (:meth:`CreaseCut.sample_map`): the surface agrees there because the partition
   (fixed end-line scales, :mod:`gerbs_core.gauge.blend`) and the local functions
   (curve constraints, :mod:`gerbs_core.mesh.crease_fits`) are side-independent.
-* partial weights (0 < w < 1) and vertex creases tighten the surface through the
-  tension energy (:func:`CreaseCut.sharpness`).
+* every weight (edge or vertex) tightens the surface near it through the tension energy
+  of the fair-shape rule (:meth:`CreaseCut.sharpness`): partial weights (0 < w < 1)
+  give a proportionally tighter, still C-infinity surface.
 
 Chains: the cut edges form chains between *corners* (vertices with >= 3 cut edges,
-with a vertex crease of 1, or ends of a chain at the mesh boundary); a chain
+two cut edges and a vertex crease of 1, or cut edges at the mesh boundary); a chain
 without corners is a closed loop. A vertex with a single cut edge away from the
 border is a *dart*: the crease fades out there (its chart is the full disc, as
 for an interior vertex), like Catmull-Clark's dart rule. An edge both of whose
@@ -227,11 +228,14 @@ class CreaseCut:
                              shape=(n, self.original.n_vertices))
 
     def sharpness(self, base: np.ndarray) -> np.ndarray:
-        """Face sharpness (F,) for the tension energy: max(base, w) over the faces at edges of
-        partial (and uncut full) weight w and at vertices of vertex crease w."""
+        """Face sharpness (F,) for the tension energy: max(base, w) over the faces at creased
+        edges of weight w (full ones too: measured on a UV sphere's equator, the surface
+        near a cut crease without it stood further from the cage, 0.059 mean, than at
+        w = 0.999, 0.046; with it 0.043, so tightness grows with w up to 1) and at vertices
+        of vertex crease w."""
         topo = self.original
         s = np.array(base, dtype=np.float64)
-        w = np.where(self.cut, 0.0, self.edge_weight)
+        w = self.edge_weight
         ef = topo.edge_faces
         for k in (0, 1):
             has = ef[:, k] >= 0
