@@ -8,21 +8,19 @@ For Suzanne, an icosphere and a 32x32 grid, and Subsurf levels giving ~30k and
 count is closest to Subsurf's (both counts printed; must agree within 5%).
 Times (medians of repeats, seconds), each including the depsgraph evaluation
 and access to the evaluated mesh's positions:
-  build   add the modifier to a mesh without one, evaluate. GERBS "build G" is
-          cold: the process-wide star-envelope memo is cleared before every
-          timed build (outside the timer), as for the first surface of a session;
-          "warm G" keeps it (a rebuild after a settings change). One untimed
-          build of each modifier first (imports, kernel tables, Blender's lazy
-          set-up), then the timed repeats, interleaved (Subsurf, GERBS cold, GERBS
-          warm in every round) so both see the same machine load.
+  build   add the modifier to a mesh without one, evaluate (from scratch: the
+          core keeps no process-wide cache). One untimed build of each modifier
+          first (imports, kernel tables, Blender's lazy set-up), then the timed
+          repeats, interleaved (Subsurf, GERBS in every round) so both see the
+          same machine load.
   1 vert  move one base vertex, evaluate
   all     move every base vertex, evaluate
-"pair" is the median over the rounds of (GERBS cold / Subsurf) within a round,
+"pair" is the median over the rounds of (GERBS / Subsurf) within a round,
 less sensitive to load changing during the run than the ratio of the medians.
 The add-on's node group is made once (printed: "group"; it is removed with the
 last GERBS modifier, so a fake user keeps it through the add/remove rounds).
 Targets (issue 5): GERBS update <= 0.5x Subsurf at ~120k vertices; build <= 4x
-(cold).
+(from scratch).
 """
 from __future__ import annotations
 
@@ -134,38 +132,30 @@ def bench_pair(bpy, obj, level, repeats):
         api.remove(obj)
         evaluated_positions(bpy, obj)
 
-    from gerbs_core.mesh.cover import clear_envelope_cache
-
-    def timed(build, clear, cold=False):
+    def timed(build, clear):
         clear()
-        if cold:
-            clear_envelope_cache()
         t0 = time.perf_counter()
         build()
         t = time.perf_counter() - t0
         clear()
         return t
 
-    # builds interleaved (S, G cold, G warm per round) so that both modifiers see the
+    # builds interleaved (S, G per round) so that both modifiers see the
     # same machine load; one untimed build of each first
     timed(sub_build, sub_clear)
     timed(gerbs_build, gerbs_clear)
-    builds = {"subsurf": [], "gerbs": [], "gerbs warm": []}
+    builds = {"subsurf": [], "gerbs": []}
     for _ in range(max(3, repeats)):
         builds["subsurf"].append(timed(sub_build, sub_clear))
-        builds["gerbs"].append(timed(gerbs_build, gerbs_clear, cold=True))
-        gerbs_build()  # fills the memo, untimed
-        builds["gerbs warm"].append(timed(gerbs_build, gerbs_clear))
+        builds["gerbs"].append(timed(gerbs_build, gerbs_clear))
     for name, build, clear in (("subsurf", sub_build, sub_clear), ("gerbs", gerbs_build, gerbs_clear)):
         build()
         evaluated_positions(bpy, obj)
         one = median_time(lambda: (mover.one(), evaluated_positions(bpy, obj)), repeats)
         allv = median_time(lambda: (mover.all(), evaluated_positions(bpy, obj)), repeats)
-        rows[name] = (statistics.median(builds[name]),
-                      statistics.median(builds["gerbs warm" if name == "gerbs" else name]),
-                      one, allv)
+        rows[name] = (statistics.median(builds[name]), one, allv)
         clear()
-    # median over rounds of the cold-build ratio within each round (robust to load drift)
+    # median over rounds of the build ratio within each round (robust to load drift)
     rows["paired"] = statistics.median(g / s for g, s in zip(builds["gerbs"], builds["subsurf"]))
     return n_sub, n_gerbs, r, rows
 
@@ -189,15 +179,15 @@ def main(argv=None) -> int:
     objects = make_objects(bpy)
     levels = {"suzanne": (3, 4), "icosphere": (3, 4), "grid 32x32": (3, 4)}
     print(f"{'mesh':<11} {'lvl':>3} {'subsurf pts':>11} {'r':>3} {'gerbs pts':>10} {'diff':>6} | "
-          f"{'build S':>8} {'build G':>8} {'G/S':>5} {'pair':>5} {'warm G':>8} {'G/S':>5} | "
+          f"{'build S':>8} {'build G':>8} {'G/S':>5} {'pair':>5} | "
           f"{'1vert S':>8} {'1vert G':>8} {'G/S':>5} | {'all S':>8} {'all G':>8} {'G/S':>5}")
     for name, obj in objects.items():
         for level in levels[name][: 1 if args.quick else 2]:
             n_sub, n_g, r, rows = bench_pair(bpy, obj, level, args.repeats)
-            (bs, _, os_, as_), (bg, wg, og, ag) = rows["subsurf"], rows["gerbs"]
+            (bs, os_, as_), (bg, og, ag) = rows["subsurf"], rows["gerbs"]
             print(f"{name:<11} {level:>3} {n_sub:>11} {r:>3} {n_g:>10} {100 * (n_g - n_sub) / n_sub:>5.1f}% | "
                   f"{bs:>8.4f} {bg:>8.4f} {bg / bs:>5.2f} {rows['paired']:>5.2f} "
-                  f"{wg:>8.4f} {wg / bs:>5.2f} | "
+                  "| "
                   f"{os_:>8.4f} {og:>8.4f} {og / os_:>5.2f} | "
                   f"{as_:>8.4f} {ag:>8.4f} {ag / as_:>5.2f}", flush=True)
     blender_addon.unregister()

@@ -169,15 +169,19 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     V = len(degrees)
     mmax = n_monomials(dmax)
     deg = monomial_exponents(dmax).sum(1)
-    SC = len(smp.vertex)
-    active = np.arange(mmax)[None, :] < np.array([n_monomials(d) for d in degrees])[:, None]
+    SC, L = len(smp.vertex), smp.n_samples
     P, w, s = smp.psi, smp.weight, smp.sharp
     wa = rule.mu * w * P * (1.0 - P)                  # agreement weight of each row
     wt = rule.lam * w * s * P                         # tension weight
-    Bs = smp.Bs * active[smp.vertex]
-    rowidx = (smp.vertex[:, None] * mmax + np.arange(mmax)).ravel()
-    BsT = sp.csr_matrix((Bs.ravel(), (rowidx, np.repeat(np.arange(SC), mmax))),
-                        shape=(V * mmax, SC))
+    # the rows' monomials, only those of each vertex's own degree (the others have zero
+    # coefficients): Bu (SC, V MMAX) csr and the scaled Bs^T (V MMAX, SC) csc, built
+    # directly in compressed form (no coo sort: these are the largest matrices)
+    active = (np.arange(mmax)[None, :]
+              < np.array([n_monomials(d) for d in degrees])[smp.vertex][:, None])
+    cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active]
+    ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))])
+    Bu = sp.csr_matrix((smp.Bu[active], cols, ptr), shape=(SC, V * mmax))
+    BsT = sp.csc_matrix((smp.Bs[active], cols, ptr), shape=(V * mmax, SC))
     # per vertex normal matrices of data + agreement + tension (block diagonal B^T W B)
     N = normals.copy()
     G2 = (BsT @ sp.diags(wa + wt) @ BsT.T).tocoo()
@@ -188,18 +192,17 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
         M = n_monomials(d)
         Pinv[vs, :M, :M] = pinned_normal_inverse(N[vs, :M, :M], d)
     Pinv = Pinv / h[:, None, None] ** deg[None, :, None]      # unscale: c = scaled / h^|m|
-    rows = sp.csr_matrix((np.ones(SC), (np.arange(SC), smp.vertex)), shape=(SC, V))
-    gather = sp.csr_matrix((np.ones(SC), (np.arange(SC), smp.sample)), shape=(SC, smp.n_samples))
+    one = np.arange(SC + 1)
+    gather = sp.csr_matrix((np.ones(SC), smp.sample, one), shape=(SC, L))
     parts = {
         "blk": _block_diagonal(Pinv),
         "rhs": rhs.tocsr(),
         "BsT": BsT,
-        "rows": rows,
+        "rows": sp.csr_matrix((np.ones(SC), smp.vertex, one), shape=(SC, V)),
         "cage": (gather @ smp.cage).tocsr(),
-        "Bu": sp.csr_matrix((smp.Bu.ravel(), (np.repeat(np.arange(SC), mmax), rowidx)),
-                            shape=(SC, V * mmax)),
+        "Bu": Bu,
         "gather": gather,
-        "agg": sp.csr_matrix((P, (smp.sample, np.arange(SC))), shape=(smp.n_samples, SC)),
+        "agg": sp.csc_matrix((P, smp.sample, one), shape=(L, SC)),
         "Wt": sp.diags(wt, format="csr"),
         "Wa": sp.diags(wa, format="csr"),
         "Dp": sp.diags(rule.mu * w * P, format="csr"),

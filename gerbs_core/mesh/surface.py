@@ -23,21 +23,20 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
-from .agreement import MMAX, FairnessRule, face_sharpness, fair_fits
+from .agreement import MMAX, FairnessRule, fair_fits
 from .charts import BOUNDARY_RULES, vertex_charts
 from .coupling import CopiedFits
 from .cover import require_cover, star_cover
-from .crease_fits import corner_scales, curve_constraints
-from .creases import crease_cut
+from .crease_surface import build_model, crease_input, first_occurrence, merge_tessellation
 from .evaluate import corner_terms, evaluate, groups
 from .lattice import Lattice
 from .layout import face_layouts
 from .memory import memory_estimate
 from .monomials import monomials
+from .repair import repair_mesh
 from .rings import data_rings
 from .stencil import Stencil
 from .topology import MeshTopology
-from .validation import validate_geometry
 
 __all__ = ["BlendingSurface", "SurfaceModel"]
 
@@ -119,36 +118,44 @@ class BlendingSurface:
         the control of the smoothness tests.
     memory_budget : bytes a tessellation or stencil may use (ResourceLimitError beyond).
     eps0_resolution : lattice resolution of the cover-thickness check :attr:`eps0`.
-    creases : optional edge crease weights in [0, 1] (Blender's ``crease_edge``): an (E,)
-        array aligned with ``MeshTopology.edges`` or a mapping {(i, j): w}. A weight of 1
-        cuts the surface along the edge (a crease curve through its vertices, C0 with a
-        normal jump); partial weights make the surface near the edge proportionally
-        tighter (still smooth). :mod:`gerbs_core.mesh.creases`.
-    corners : optional (V,) vertex crease weights in [0, 1] (``crease_vert``): 1 makes a
-        crease chain through the vertex a corner; any weight tightens the surface there.
+    merge_distance : None (default) or a distance: weld vertices closer than it first.
+    creases : optional edge crease weights in [0, 1] (Blender's ``crease_edge``) on INPUT
+        vertex pairs: a mapping {(i, j): w} or a pair (edges (K, 2) int, weights (K,)).
+        A weight of 1 cuts the surface along the edge: a crease curve through its vertices,
+        C0 with a normal jump; chains of such edges give smooth crease curves, their ends
+        and vertices with >= 3 of them are corners. Partial weights make the surface near
+        the edge proportionally tighter (still C-infinity). :mod:`gerbs_core.mesh.creases`.
+    corners : optional (V,) input vertex crease weights in [0, 1] (``crease_vert``): 1 makes
+        a crease chain through the vertex a corner; any weight tightens the surface there.
+        Both map through the repair (``vertex_map``; :mod:`gerbs_core.mesh.crease_surface`).
+
+    Any mesh is first repaired into an oriented 2-manifold (:mod:`gerbs_core.mesh.repair`:
+    bow-ties, non-manifold edges, loose, degenerate and duplicate elements); the surface
+    is that of the repaired mesh: :attr:`vertices` (V', 3), :attr:`topology`, the output's
+    first V' samples are its vertices, :attr:`vertex_map` / :attr:`face_map` lead back to
+    the input and :attr:`warnings` say what was repaired. Positions passed in
+    (``vertices``, ``rest_positions``, ``normals``, :meth:`with_positions`,
+    ``stencil().apply``) are the input's (V, 3).
 
     With creases the per-vertex arrays (:attr:`degrees`, :attr:`coefficients`,
     :attr:`charts`, :meth:`local_function`, :meth:`chart_evaluate`) index the vertex
-    copies of the cut mesh (``model.crease.copy_of`` maps them to vertices); outputs
-    (:meth:`tessellate`, :meth:`stencil`, :meth:`lattice`) are on the original mesh.
+    copies of the cut mesh (``model.crease.copy_of`` maps them to repaired vertices);
+    outputs (:meth:`tessellate`, :meth:`stencil`, :meth:`lattice`) are on the repaired mesh.
 
-    Raises InvalidMeshError (topology/geometry) or InvalidParameterError; the
-    caller's arrays are never modified. Immutable.
+    Raises InvalidMeshError (what no surface can come from: NaN, empty, ...) or
+    InvalidParameterError; the caller's arrays are never modified. Immutable.
     """
 
     def __init__(self, vertices, faces, kernel=None, rest_positions=None, boundary: str = "keep",
                  normals=None, *, fairness: FairnessRule | None = None, kappa: float = 0.8,
                  shrink: float = 0.95, exact_gauge: bool = False, memory_budget: float = 2.0e9,
-                 eps0_resolution: int = 6, creases=None, corners=None):
+                 eps0_resolution: int = 6, merge_distance: float | None = None,
+                 creases=None, corners=None):
         X = _points("vertices", vertices)
-        topo = faces if isinstance(faces, MeshTopology) else MeshTopology(faces, len(X))
-        if topo.n_vertices != len(X):
-            raise InvalidParameterError("vertices", f"must have {topo.n_vertices} rows (the "
-                                        f"topology's vertices), got {len(X)}")
-        validate_geometry(X, topo)
-        rest = X if rest_positions is None else _points("rest_positions", rest_positions, len(X))
-        if rest_positions is not None:
-            validate_geometry(rest, topo)
+        rest = None if rest_positions is None else _points("rest_positions", rest_positions, len(X))
+        self.repair = repair_mesh(X, faces, merge_distance=merge_distance, rest_positions=rest)
+        X, topo = np.array(self.repair.vertices), self.repair.topology
+        rest = X if rest is None else np.array(self.repair.rest)
         if kernel is None:
             from ..kernels import ERBS
             kernel = ERBS()
@@ -170,14 +177,21 @@ class BlendingSurface:
         self.eps0_resolution = _positive("eps0_resolution", eps0_resolution, integer=True, lo=1,
                                          closed=True)
         self.kernel = kernel
-        self._normals = None if normals is None else self._unit_normals(normals, len(X))
-        cut = None
-        if creases is not None or corners is not None:
-            cut = crease_cut(topo, creases, corners)
-            if not (cut.edge_weight.any() or cut.vertex_weight.any()):
-                cut = None
-        self.model = _build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink,
-                                  exact_gauge)
+        self._normals = None if normals is None else \
+            self._unit_normals(normals, len(self.repair.representative))[self.repair.vertex_map]
+        cut = crease_input(self.repair, faces, creases, corners)
+        if cut is None:
+            layouts = face_layouts(topo, rest)
+            charts = vertex_charts(topo, layouts.corners, layouts.angles, boundary)
+            cover = star_cover(topo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge)
+            rings = data_rings(topo, charts, layouts.corners)
+            degrees, fits = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
+            degrees.flags.writeable = False
+            self.model = SurfaceModel(topo, layouts, charts, cover, degrees, fits, boundary)
+        else:
+            parts = build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink,
+                                exact_gauge)
+            self.model = SurfaceModel(cut.topology, *parts, boundary, cut)
         self._X = X
         self._X.flags.writeable = False
         self._coef = self._coefficients(X)
@@ -210,7 +224,7 @@ class BlendingSurface:
 
     @property
     def topology(self) -> MeshTopology:
-        """The mesh's topology (with creases: the original, uncut mesh)."""
+        """The repaired mesh's topology (with creases: before the cut)."""
         cut = self.model.crease
         return self.model.topology if cut is None else cut.original
 
@@ -234,7 +248,23 @@ class BlendingSurface:
 
     @property
     def vertices(self) -> np.ndarray:
+        """(V', 3) positions of the repaired mesh's vertices (= input[vertex_map])."""
         return self._X.copy()
+
+    @property
+    def vertex_map(self) -> np.ndarray:
+        """(V',) the input vertex of each vertex of the surface (and output vertex sample)."""
+        return self.repair.vertex_map
+
+    @property
+    def face_map(self) -> np.ndarray:
+        """(F',) the input face of each face of :attr:`topology`."""
+        return self.repair.face_map
+
+    @property
+    def warnings(self) -> tuple:
+        """What the repair changed (:class:`gerbs_core.mesh.repair.MeshWarning`, ordered)."""
+        return self.repair.warnings
 
     @property
     def coefficients(self) -> np.ndarray:
@@ -242,10 +272,11 @@ class BlendingSurface:
         return self._coef
 
     def with_positions(self, vertices) -> "BlendingSurface":
-        """The surface of new positions with the same binding (model shared, not copied)."""
+        """The surface of new input positions (V, 3) with the same binding (model shared)."""
         new = object.__new__(BlendingSurface)
         new.__dict__.update({k: v for k, v in self.__dict__.items() if k != "eps0"})
-        new._X = _points("vertices", vertices, len(self._X))
+        new._X = self.repair.positions(_points("vertices", vertices,
+                                               len(self.repair.representative)))
         new._X.flags.writeable = False
         new._coef = new._coefficients(new._X)
         return new
@@ -362,18 +393,17 @@ class BlendingSurface:
                                      f"{self.memory_budget / 1e6:.0f} MB (memory_budget)")
         return Lattice(self.topology, resolution)
 
-
     def tessellate(self, resolution: int):
         """(points (P,3), triangles (T,3) int, normals (P,3)) at `resolution` segments per edge.
 
         Crack-free (shared edge samples once); normals from the analytic derivatives
-        dS/dx1 x dS/dx2 (at mesh vertices from the linear part of l_v).
-        With full creases the two sides of a cut edge are evaluated separately and their
-        samples merged (the same points to rounding); the normals there are the mean of
-        the two sides' (the surface has no tangent plane on a crease).
+        dS/dx1 x dS/dx2 (at mesh vertices from the linear part of l_v). With full creases
+        the two sides of a cut edge are evaluated separately and their samples merged (the
+        same points to rounding); the normals there are the mean of the two sides'.
         """
         lat = self.lattice(resolution)
-        mlat = lat if self.model.crease is None else Lattice(self.model.topology, resolution)
+        cut = self.model.crease
+        mlat = lat if cut is None else Lattice(self.model.topology, resolution)
         x = mlat.map_to_polygon(self.layouts.corners)
         (S, dS), eps = self._evaluate(mlat.face, x, 1)
         self._require_cover(eps)
@@ -382,17 +412,11 @@ class BlendingSurface:
         ln = np.linalg.norm(nrm, axis=1)
         nrm /= np.where(ln > 0, ln, 1.0)[:, None]
         if mlat is not lat:
-            m = self.model.crease.sample_map(mlat)
-            S = S[first_occurrence(m, lat.n_points)]
-            merged = np.zeros((lat.n_points, 3))
-            np.add.at(merged, m, nrm)
-            nrm = merged
-            ln = np.linalg.norm(nrm, axis=1)
-            nrm /= np.where(ln > 0, ln, 1.0)[:, None]
+            S, nrm = merge_tessellation(cut, mlat, lat, S, nrm)
         return S, np.array(lat.triangles), nrm
 
     def stencil(self, resolution: int) -> Stencil:
-        """The output points at `resolution` as a linear map of the positions
+        """The output points at `resolution` as a linear map of the input positions X (V, 3)
         (:class:`gerbs_core.mesh.stencil.Stencil`): ``stencil.apply(X) ==
         tessellate(resolution)[0]``. Not available with Hermite normals."""
         if self._normals is not None:
@@ -403,41 +427,13 @@ class BlendingSurface:
         cut = self.model.crease
         if cut is None:
             base, mono, eps = assemble(self.model, lat)
-            self._require_cover(eps)
-            return Stencil(base, mono, self.model.fits, lat)
-        mlat = Lattice(self.model.topology, resolution)
-        base, mono, eps = assemble(self.model, mlat)
+            fits = self.model.fits
+        else:
+            mlat = Lattice(self.model.topology, resolution)
+            base, mono, eps = assemble(self.model, mlat)
+            rows = first_occurrence(cut.sample_map(mlat), lat.n_points)
+            # merged crease samples: one row each; the columns of a vertex's copies summed
+            base, mono = base[rows] @ cut.copy_matrix, mono[rows]
+            fits = CopiedFits(self.model.fits, cut)
         self._require_cover(eps)
-        rows = first_occurrence(cut.sample_map(mlat), lat.n_points)
-        # merged crease samples: one row each; columns of vertex copies summed into the vertex
-        return Stencil(base[rows] @ cut.copy_matrix, mono[rows], CopiedFits(self.model.fits, cut),
-                       lat)
-
-
-def first_occurrence(m, n):
-    """(n,) the first index i with m[i] = j, for every j in [0, n) (m covers all of them)."""
-    rep = np.empty(n, dtype=np.int64)
-    rep[m[::-1]] = np.arange(len(m) - 1, -1, -1)
-    return rep
-
-
-def _build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink, exact_gauge):
-    """The SurfaceModel of a topology and rest shape (with creases: of the cut mesh)."""
-    mtopo = topo if cut is None else cut.topology
-    mrest = rest if cut is None else cut.positions(rest)
-    layouts = face_layouts(mtopo, mrest)
-    scale, ends, cons = None, None, None
-    sharp = face_sharpness(topo, rest, fairness.sharp_from, fairness.sharp_to)
-    if cut is not None:
-        sharp = cut.sharpness(sharp)
-        scale = corner_scales(cut, layouts.angles, rest, cut.chart_scales(layouts.angles))
-        ends = cut.crease_ends()
-    charts = vertex_charts(mtopo, layouts.corners, layouts.angles, boundary, scale)
-    cover = star_cover(mtopo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge, ends)
-    rings = data_rings(mtopo, charts, layouts.corners)
-    if cut is not None and cut.any_cut:
-        cons = lambda degrees: curve_constraints(cut, charts, rest, degrees, MMAX)  # noqa: E731
-    degrees, fits = fair_fits(mtopo, charts, layouts.corners, cover, rings, mrest, fairness,
-                              sharp, cons)
-    degrees.flags.writeable = False
-    return SurfaceModel(mtopo, layouts, charts, cover, degrees, fits, boundary, cut)
+        return Stencil(self.repair.to_input(base), mono, self.repair.fits_of_input(fits), lat)
