@@ -28,7 +28,7 @@ from .charts import BOUNDARY_RULES, vertex_charts
 from .coupling import CopiedFits
 from .cover import require_cover, star_cover
 from .crease_surface import build_model, crease_input, first_occurrence, merge_tessellation
-from .evaluate import corner_terms, evaluate, groups
+from .evaluate import evaluate, partition_at
 from .lattice import Lattice
 from .layout import face_layouts
 from .memory import memory_estimate
@@ -336,24 +336,7 @@ class BlendingSurface:
         psi (N, n)) with n the largest face size (padding: vertex -1, values 0); with
         nu = 1 also dPsi (N, n, 2)."""
         f, x, _ = self._face_points(face_index, local_coords)
-        topo = self.model.topology
-        nmax = int(topo.face_sizes.max())
-        verts = np.full((len(f), nmax), -1, dtype=np.int64)
-        Ps, ps, dP = np.zeros((len(f), nmax)), np.zeros((len(f), nmax)), np.zeros((len(f), nmax, 2))
-        for n, faces, sel, xb in groups(topo, self.layouts.corners, f, x):
-            u, Psi, _, _ = corner_terms(self.model, n, faces, xb, nu, degree=1)
-            if self.model.crease is not None:
-                u = self.model.crease.copy_of[u]
-            cb = topo.face_offsets[faces][None, :, None] + np.arange(n)[:, None, None]
-            psi = self.model.cover.psi_jet(self.charts, cb, xb[None], 0)[0][0]
-            valid = sel >= 0
-            s = sel[valid]
-            for k in range(n):
-                verts[s, k] = np.broadcast_to(u[k][:, None], valid.shape)[valid]
-                Ps[s, k], ps[s, k] = Psi[0][k][valid], psi[k][valid]
-                if nu >= 1:
-                    dP[s, k] = Psi[1][k][valid]
-        return (verts, Ps, ps, dP) if nu >= 1 else (verts, Ps, ps)
+        return partition_at(self.model, f, x, nu)
 
     def local_function(self, v: int, y, nu: int = 0):
         """l_v and its derivatives at chart points y (N, 2): [(N,3), (N,3,2), (N,3,2,2)]."""
