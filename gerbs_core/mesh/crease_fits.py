@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from .creases import CORNER
+from .creases import CORNER, FULL
 from .monomials import monomial_exponents, n_monomials
 
 __all__ = ["CurveConstraints", "curve_constraints", "curve_arms", "corner_scales", "HDEG",
@@ -125,6 +125,11 @@ def _copy_rays(cut, charts=None):
     return out
 
 
+def _arm_vertex(cut, arm):
+    k, pos, _ = arm
+    return int(cut.chains[k][0][pos])
+
+
 def _arm_direction(cut, arm, X):
     k, pos, step = arm
     vs, _, closed = cut.chains[k]
@@ -136,10 +141,11 @@ def _arm_direction(cut, arm, X):
 def curve_arms(cut, X):
     """{arm: (curve, orientation)} and the curves (lists of 1 or 2 arms): the arms of one
     chain through a chain-interior vertex form one curve (its two sides), a chain end one
-    curve, and at a corner two arms whose first edges make an angle above THROUGH (150
-    degrees; greedily, straightest first) share one curve -- the crease continues
-    smoothly through the corner, e.g. a T-junction's bar or a vertex crease on a straight
-    chain; a linear part cannot give two antiparallel rays two different tangents."""
+    curve, and at a corner of three or more cut edges two arms whose first edges make an
+    angle above THROUGH (150 degrees; greedily, straightest first) share one curve -- the
+    crease continues smoothly through the corner, e.g. a T-junction's bar; a linear part
+    cannot give two antiparallel rays two different tangents. At a vertex crease of 1 the
+    user asked for a corner: no arms are paired there."""
     arms_at = {}
     for k, (vs, _, closed) in enumerate(cut.chains):
         n = len(vs)
@@ -149,7 +155,9 @@ def curve_arms(cut, X):
                     arms_at.setdefault(int(vs[pos]), []).append((k, pos, step))
     curves, of = [], {}
     for a, arms in arms_at.items():
-        if not cut.corner[a]:
+        if cut.corner[a] and cut.vertex_weight[a] >= FULL:
+            todo = [[arm] for arm in arms]
+        elif not cut.corner[a]:
             groups = {}
             for arm in arms:
                 groups.setdefault((arm[0], arm[1]), []).append(arm)
@@ -202,11 +210,11 @@ def corner_scales(cut, angles, X, scale):
     return out
 
 
-def _curve_fit(cut, arms, X, degree):
+def _curve_fit(cut, arms, X, degree, reach=REACH):
     """Rows W (d, n) and data vertices (n,) of h_1..h_d of the curve made of ``arms`` (the
     first arm at s > 0, the second at s < 0): h_k = sum_j W[k-1, j] (X[ids[j]] - X[a]);
-    d = min(degree, number of data). Data: up to REACH chain steps along each arm, not past
-    the chain's ends; on short loops every vertex once."""
+    d = min(degree, number of data). Data: up to ``reach`` chain steps along each arm, not
+    past the chain's ends; on short loops every vertex once."""
     idx, s = [], []
     a = None
     for o, (k, pos, step) in zip((1.0, -1.0), arms):
@@ -214,7 +222,7 @@ def _curve_fit(cut, arms, X, degree):
         n = len(vs)
         a = vs[pos]
         length = 0.0
-        for t in range(1, REACH + 1):
+        for t in range(1, reach + 1):
             j = pos + step * t
             if not closed and not 0 <= j < n:
                 break
@@ -269,7 +277,11 @@ def curve_constraints(cut, charts, X, degrees, mmax) -> CurveConstraints | None:
     dmin = {}
     for c, _, k, _ in rays:
         dmin[k] = min(dmin.get(k, HDEG), int(degrees[c]))
-    fits = {k: _curve_fit(cut, curves[k], X, d) for k, d in dmin.items()}
+    # a curve ending at a corner leaves it along its first edge (reach 1: h = the chord's
+    # line), as Catmull-Clark's corner rule does: the crease turns by the mesh's angle there
+    fits = {k: _curve_fit(cut, curves[k], X, d,
+                          1 if len(curves[k]) == 1 and cut.corner[_arm_vertex(cut, curves[k][0])]
+                          else REACH) for k, d in dmin.items()}
     kr, kc, kv, gr, gc, gv, cp = [], [], [], [], [], [], []
     row = 0
     for c, e, k, sign in rays:
