@@ -52,6 +52,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import InvalidMeshError, _short
 from . import repair_faces as rf
@@ -158,9 +159,17 @@ class _InputFits:
     def operator(self):
         return self._repair.to_input(self._fits.operator)
 
-    @property
-    def nnz_estimate(self) -> int:
-        return self._fits.nnz_estimate
+    def columns(self, cols):
+        """Columns ``cols`` (input vertices) of :attr:`operator` (csc)."""
+        cols = np.asarray(cols, dtype=np.int64).ravel()
+        rep = self._repair
+        mine = np.flatnonzero(np.isin(rep.vertex_map, cols))   # repaired copies of cols
+        own = self._fits.columns(mine)
+        # each repaired copy k of input vertex j adds its column to j's
+        at = np.searchsorted(np.sort(cols), rep.vertex_map[mine])
+        sel = sp.csr_matrix((np.ones(len(mine)), (np.arange(len(mine)), np.argsort(cols)[at])),
+                            shape=(len(mine), len(cols)))
+        return (own @ sel).tocsc()
 
 
 def _warning(tag, indices, element, detail=None):

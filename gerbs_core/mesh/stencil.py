@@ -79,13 +79,14 @@ class Stencil:
     def apply_moved(self, points: np.ndarray, moved: np.ndarray, delta: np.ndarray) -> None:
         """points += the change of the output when the vertices ``moved`` (m,) move by
         ``delta`` (m, k), in place, touching only the affected rows (exact up to round-off:
-        the same sums regrouped)."""
+        the same sums regrouped). Needs only the moved vertices' columns of the
+        coefficient operator (:meth:`CoupledFits.columns`), never the whole operator."""
         if self._csc is None:
-            self._csc = (self.base.tocsc(), self.operator.tocsc(), self.mono.tocsc())
-        Bc, Ac, Ec = self._csc
+            self._csc = (self.base.tocsc(), self.mono.tocsc())
+        Bc, Ec = self._csc
         moved = np.asarray(moved, dtype=np.int64)
         dB = Bc[:, moved]
-        dc = Ac[:, moved] @ delta                       # (V M, k) coefficient changes
+        dc = self.fits.columns(moved) @ delta           # (V M, k) coefficient changes
         rows = np.flatnonzero(np.any(dc != 0, axis=1))
         dE = Ec[:, rows]
         hitB = dB.tocoo()

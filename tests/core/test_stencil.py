@@ -84,6 +84,26 @@ def test_locality_exact(name):
         assert np.abs(pts - s.with_positions(Y).tessellate(r)[0]).max() <= 1e-12
 
 
+@pytest.mark.parametrize("name", ["icosphere", "mixed_bent"])
+def test_partial_updates_take_single_columns_of_the_coefficient_map(name):
+    # apply_moved needs only the moved vertices' columns (CoupledFits.columns), so it
+    # never makes the whole operator; the columns equal the operator's to round-off
+    V, F = MESHES[name]()
+    st = BlendingSurface(V, F).stencil(3)
+    pts = st.apply(V)
+    moved = np.array([1, 4])
+    delta = np.array([[0.02, 0.0, -0.01], [0.0, 0.03, 0.01]])
+    st.apply_moved(pts, moved, delta)
+    assert not st.fits.operator_built
+    Y = V.copy()
+    Y[moved] += delta
+    assert np.abs(pts - st.apply(Y)).max() <= 1e-13
+    cols = st.fits.columns(moved).toarray()
+    op = st.operator[:, moved].toarray()
+    assert np.abs(cols - op).max() <= 1e-10 * max(np.abs(op).max(), 1.0)
+    assert np.array_equal(cols != 0, op != 0) or np.abs(cols[op == 0]).max() <= 1e-12
+
+
 def test_support_is_a_few_rings():
     # a coefficient depends on the data rings (2) plus one ring per coupling sweep (2);
     # a sample on the corners of its face: moving w reaches the faces within 5 rings
