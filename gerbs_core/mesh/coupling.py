@@ -155,6 +155,19 @@ class CopiedFits:
     def nnz_estimate(self) -> int:
         return int(self.operator.nnz) if self.operator_built else self.inner.nnz_estimate
 
+    def columns(self, cols) -> sp.csc_matrix:
+        """Columns ``cols`` (vertices) of :attr:`operator` (csc), from the inner map's columns
+        of their copies (each copy's column added to its vertex's)."""
+        cols = np.asarray(cols, dtype=np.int64).ravel()
+        if self.operator_built:
+            return self.operator.tocsc()[:, cols]
+        copy_of = self._cut.copy_of
+        mine = np.flatnonzero(np.isin(copy_of, cols))
+        at = np.searchsorted(np.sort(cols), copy_of[mine])
+        sel = sp.csr_matrix((np.ones(len(mine)), (np.arange(len(mine)), np.argsort(cols)[at])),
+                            shape=(len(mine), len(cols)))
+        return (self.inner.columns(mine) @ sel).tocsc()
+
 
 def identity_fits(chosen, projection=None) -> CoupledFits:
     """The chosen data fits alone (no coupling sweeps), constrained by ``projection``

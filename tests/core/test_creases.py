@@ -242,3 +242,20 @@ def test_the_two_sides_of_every_crease_agree():
     gap = np.abs(S - last[m]).max()
     print(f"{int(cut.cut.sum())} cut edges: sides disagree by {gap:.1e}")
     assert cut.cut.sum() > 50 and gap <= 1e-11
+
+
+def test_partial_update_of_a_creased_stencil():
+    """Stencil.apply_moved (the drag path) on a creased surface: the moved vertices'
+    columns come from their copies' columns."""
+    V, F, T, edges, loop = _latitude()
+    s = BlendingSurface(V, F, creases=_crease_map(T, edges))
+    st = s.stencil(4)
+    P0 = st.apply(V)
+    moved = np.array([loop[2], 0])
+    delta = np.array([[0.0, 0.0, 0.1], [0.05, 0.0, 0.0]])
+    X1 = V.copy()
+    X1[moved] += delta
+    pts = P0.copy()
+    st.apply_moved(pts, moved, delta)
+    assert np.abs(pts - st.apply(X1)).max() <= 1e-12
+    assert np.abs(pts - s.with_positions(X1).tessellate(4)[0]).max() <= 1e-12
