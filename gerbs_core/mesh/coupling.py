@@ -25,10 +25,16 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from .coupling_local import local_parts, neighbourhood, vertex_graph
 from .fits import pinned_normal_inverse
 from .monomials import monomial_exponents, n_monomials
 
-__all__ = ["CoupledFits", "CopiedFits", "coupled_fits", "identity_fits"]
+__all__ = ["CoupledFits", "CopiedFits", "coupled_fits", "identity_fits", "LOCAL_REACH"]
+
+# hops in the data-fit graph (each up to 2 rings) around moved vertices within which a
+# column of the map and all its intermediates lie, with a margin: data fit 1 hop, each
+# of the (2) sweeps at most 1 more, the margin 1 (tested against the operator)
+LOCAL_REACH = 4
 
 
 class CoupledFits:
@@ -45,42 +51,17 @@ class CoupledFits:
         self.sweeps = int(sweeps) if parts is not None else 0
         self.damping = float(damping)
         self._parts = parts
-        self._projection = projection
+        self._projection = projection   # crease curve constraints (R, K, G) or None
         self.shape = self.chosen.shape
+        self._last = None     # (key, columns): memo of the last columns() request
 
     def __call__(self, X):
         """Coefficients (V MMAX, k) for positions X (V, k) or (V,)."""
         return self._map(np.asarray(X, dtype=np.float64))
 
-    def _project(self, c, Y):
-        """The linear constraints (crease curves, :mod:`gerbs_core.mesh.crease_fits`), if any:
-        c - R (K c - G Y)."""
-        if self._projection is None:
-            return c
-        R, K, G = self._projection
-        c = c - R @ (K @ c - G @ Y)
-        if sp.issparse(c):
-            c = c.tocsr()
-            c.eliminate_zeros()
-        return c
-
     def _map(self, Y):
         """The map applied to Y: a dense (V, k) array, or a sparse (V, V) matrix."""
-        c = self._project(self.chosen @ Y, Y)
-        if not self.sweeps:
-            return c
-        p = self._parts
-        Xs = p["rows"] @ Y                                   # X_v of every row
-        fixed = p["rhs"] @ Y + p["BsT"] @ (p["Wt"] @ (p["cage"] @ Y - Xs) - p["Wa"] @ Xs)
-        d = self.damping
-        for _ in range(self.sweeps):
-            l = Xs + p["Bu"] @ c                              # l_v at the rows' samples
-            T = p["gather"] @ (p["agg"] @ l)                  # sum of the sample's P l
-            new = p["blk"] @ (fixed + p["BsT"] @ (p["Dp"] @ T - p["Dpp"] @ l))
-            c = self._project((1.0 - d) * c + d * new, Y)
-            if sp.issparse(c):
-                c.eliminate_zeros()
-        return c
+        return _apply(self.chosen, self._parts, self.sweeps, self.damping, Y, self._projection)
 
     @cached_property
     def operator(self) -> sp.csr_matrix:
@@ -99,33 +80,91 @@ class CoupledFits:
 
     def columns(self, cols) -> sp.csc_matrix:
         """Columns ``cols`` (m,) of :attr:`operator` as a csc (V MMAX, m), without making
-        the operator: the map applied to those unit vectors only (the sweeps then stay
-        within the columns' rings: cost ~ their support, not the mesh), with the same
-        row-sum correction (to round-off)."""
+        the operator: the map applied to those unit vectors on a neighbourhood of them
+        (:mod:`gerbs_core.mesh.coupling_local`: cost ~ the neighbourhood, not the mesh),
+        with the same row-sum correction (to round-off). The last request is memoized
+        (a drag moves the same vertices frame after frame)."""
         cols = np.asarray(cols, dtype=np.int64).ravel()
+        key = cols.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
         if self.operator_built:
-            return self.operator.tocsc()[:, cols]
+            out = self.operator.tocsc()[:, cols]
+        else:
+            out = self._columns(cols)
+        self._last = (key, out)
+        return out
+
+    def _columns(self, cols):
         V, m = self.shape[1], len(cols)
-        unit = sp.csr_matrix((np.ones(m), (cols, np.arange(m))), shape=(V, m))
-        out = sp.csc_matrix(self._map(unit))
-        # rows of the vertices in cols: minus their row sums, in those vertices' columns
         mmax = self.shape[0] // V
-        hit = np.flatnonzero(np.isin(np.arange(self.shape[0]) // mmax, cols))
-        where = np.searchsorted(np.sort(cols), hit // mmax)
-        at = np.argsort(cols)[where]
-        fix = sp.csc_matrix((-self._row_sums[hit], (hit, at)), shape=out.shape)
-        out = (out + fix).tocsc()
+        verts = (neighbourhood(self._graph, cols, LOCAL_REACH) if self.sweeps
+                 else np.arange(V))
+        # most of the mesh, or crease constraints (global rows): the map itself
+        if len(verts) > V // 2 or self._projection is not None:
+            chosen, parts, R, verts = self.chosen, self._parts, np.arange(V * mmax), np.arange(V)
+        else:
+            chosen, parts, R = local_parts(self.chosen, self._parts, verts, mmax,
+                                           self._owner)
+        at = np.searchsorted(verts, cols)
+        unit = sp.csr_matrix((np.ones(m), (at, np.arange(m))), shape=(len(verts), m))
+        pr = self._projection
+        local = sp.csr_matrix(_apply(chosen, parts, self.sweeps, self.damping, unit, pr))
+        # minus the row sums of the moved vertices' own rows, in their columns: the same
+        # correction as the operator's (these rows' supports lie inside the neighbourhood)
+        sums = _apply(chosen, parts, self.sweeps, self.damping, np.ones((len(verts), 1)),
+                      pr)[:, 0]
+        own = np.flatnonzero(np.isin(R // mmax, cols))
+        where = np.argsort(cols)[np.searchsorted(np.sort(cols), R[own] // mmax)]
+        local = local - sp.csr_matrix((sums[own], (own, where)), shape=local.shape)
+        lc = local.tocoo()
+        out = sp.csc_matrix((lc.data, (R[lc.row], lc.col)), shape=(self.shape[0], m))
         out.eliminate_zeros()
         return out
 
     @cached_property
-    def _row_sums(self) -> np.ndarray:
-        """The map applied to the constant 1 (V MMAX,): zero up to round-off."""
-        return self._map(np.ones((self.shape[1], 1)))[:, 0]
+    def _graph(self):
+        return vertex_graph(self.chosen, self.shape[1])
+
+    @cached_property
+    def _owner(self):
+        """Per vertex its sample-corner rows (csc of the rows' vertex incidence)."""
+        return self._parts["rows"].tocsc()
 
     @property
     def operator_built(self) -> bool:
         return "operator" in self.__dict__
+
+
+def _project(proj, c, Y):
+    """The linear constraints (crease curves, :mod:`gerbs_core.mesh.crease_fits`), if any:
+    c - R (K c - G Y)."""
+    if proj is None:
+        return c
+    R, K, G = proj
+    c = c - R @ (K @ c - G @ Y)
+    if sp.issparse(c):
+        c = c.tocsr()
+        c.eliminate_zeros()
+    return c
+
+
+def _apply(chosen, p, sweeps, d, Y, proj=None):
+    """The map (module docstring) with matrices ``chosen``, ``p`` applied to Y; ``proj``
+    the crease constraints, imposed after the first fit and every sweep."""
+    c = _project(proj, chosen @ Y, Y)
+    if not sweeps:
+        return c
+    Xs = p["rows"] @ Y                                   # X_v of every row
+    fixed = p["rhs"] @ Y + p["BsT"] @ (p["Wt"] @ (p["cage"] @ Y - Xs) - p["Wa"] @ Xs)
+    for _ in range(sweeps):
+        l = Xs + p["Bu"] @ c                              # l_v at the rows' samples
+        T = p["gather"] @ (p["agg"] @ l)                  # sum of the sample's P l
+        new = p["blk"] @ (fixed + p["BsT"] @ (p["Dp"] @ T - p["Dpp"] @ l))
+        c = _project(proj, (1.0 - d) * c + d * new, Y)
+        if sp.issparse(c):
+            c.eliminate_zeros()
+    return c
 
 
 class CopiedFits:
