@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import bpy
 import numpy as np
 
+from . import creases as creases_mod
 from . import geometry_nodes as gn
 from . import mesh_io, results
 from . import settings as settings_mod
@@ -227,6 +228,10 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
         return _fail(obj, mod, key, blank, problem, progress)
     if inp is None:  # the result is shown, so it is fresh: its snapshot is the input
         inp = mesh_io.read_snapshot(res.evaluated_get(depsgraph).data)
+    # creases (blender_addon/creases.py): in the settings key, so a crease change rebuilds
+    crz = creases_mod.read(obj, depsgraph, len(inp.positions)) if inp is not None else \
+        creases_mod.NONE
+    skey = skey + (("creases", crz.key),)
     _copy_materials(obj.data, res.data)
     same = (not force and st is not None and inp is not None and st.settings == skey
             and st.result_uid == res.session_uid and st.input is not None)
@@ -248,10 +253,10 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     if inp is None:
         return _fail(obj, mod, key, blank, f"{PREFIX}internal error: the result shown "
                      f"carries no record of its input", progress)
-    return _rebuild(obj, mod, res, settings, skey, inp, progress, t0)
+    return _rebuild(obj, mod, res, settings, skey, inp, progress, t0, crz)
 
 
-def _build(settings, inp, progress):
+def _build(settings, inp, progress, crz=creases_mod.NONE):
     """(points (P, 3), triangles (T, 3), stencil or None, lattice or None, surface)."""
     from gerbs_core.mesh.surface import BlendingSurface
 
@@ -259,7 +264,8 @@ def _build(settings, inp, progress):
     X = inp.positions.astype(np.float64)
     normals = None if inp.normals is None else inp.normals.astype(np.float64)
     progress(0.05, "building surface")
-    surface = BlendingSurface(X, inp.faces(), kernel=args.kernel, normals=normals, **args.surface)
+    surface = BlendingSurface(X, inp.faces(), kernel=args.kernel, normals=normals, **args.surface,
+                              **crz.core_arguments())  # creases: blender_addon/creases.py
     if normals is not None:  # Hermite normals: not W @ X (the core refuses a stencil)
         progress(0.35, "evaluating surface")
         P, triangles, _ = surface.tessellate(args.resolution)
@@ -269,14 +275,14 @@ def _build(settings, inp, progress):
     return stencil.apply(X), stencil.triangles, stencil, stencil.lattice, surface
 
 
-def _rebuild(obj, mod, res, settings, skey, inp, progress, t0):
+def _rebuild(obj, mod, res, settings, skey, inp, progress, t0, crz=creases_mod.NONE):
     from gerbs_core.errors import GERBSError
 
     key = state_key(obj, mod)
     X = inp.positions.astype(np.float64)
     st = SurfaceState(settings=skey, input=inp, positions=X, rest=X, result_uid=res.session_uid)
     try:
-        P, triangles, st.stencil, lattice, surface = _build(settings, inp, progress)
+        P, triangles, st.stencil, lattice, surface = _build(settings, inp, progress, crz)
     except GERBSError as exc:
         return _fail(obj, mod, key, st, format_error(exc), progress)
     except Exception as exc:  # a defect of the core must not reach Blender raw
