@@ -37,7 +37,7 @@ import numpy as np
 from . import geometry_nodes as gn
 from . import mesh_io, results
 from . import settings as settings_mod
-from .errors import PREFIX, format_error
+from .errors import PREFIX, format_error, format_warnings
 from .progress import silent
 from .stencil_update import apply_stencil
 
@@ -62,6 +62,7 @@ class SurfaceState:
     error: str = ""
     build_seconds: float = 0.0
     update_seconds: float = 0.0
+    warnings: tuple = ()  # gerbs_core.mesh.repair.MeshWarning of the last build
 
 
 @dataclass(frozen=True)
@@ -107,8 +108,9 @@ def prune(alive_keys) -> None:
         del _states[key]
 
 
-def set_error(obj, mod, message: str) -> None:
-    if gn.set_error(mod, message):
+def set_error(obj, mod, message: str, warning: str = "") -> None:
+    """The modifier's error line and its warning line (what a build repaired)."""
+    if gn.set_error(mod, message) | gn.set_warning(mod, "" if message else warning):
         obj.update_tag()  # re-evaluate: the Switch node shows the base mesh or the surface
 
 
@@ -290,13 +292,21 @@ def _rebuild(obj, mod, res, settings, skey, inp, progress, t0):
         return _fail(obj, mod, key, st, (
             f"{PREFIX}internal error: the surface is not finite at {len(bad)} output points "
             f"(first {bad[:5].tolist()}); base mesh left as is"), progress)
+    if len(P) < len(X) or len(triangles) < len(inp.offsets) - 1:  # the snapshot must fit
+        return _fail(obj, mod, key, st, (
+            f"{PREFIX}resolution {settings['resolution']} gives fewer output points or "
+            f"triangles than the mesh has vertices or faces (loose or merged ones); raise "
+            f"the resolution"), progress)
     st.points, st.triangles = P, np.asarray(triangles, dtype=np.int32)
+    st.warnings = surface.warnings
+    for warning in st.warnings:
+        log.warning("GERBS: %s: %s", obj.name, warning.message)
     _write_result(res.data, st, _states.get(key), lattice, surface, settings, inp)
     gn.write_built(mod, settings)
     st.n_points, st.n_triangles = len(P), len(st.triangles)
     st.build_seconds = time.perf_counter() - t0
     _states[key] = st
-    set_error(obj, mod, "")
+    set_error(obj, mod, "", format_warnings(st.warnings))
     obj.update_tag()
     progress(1.0, "done")
     return SyncResult("rebuilt")
@@ -312,7 +322,8 @@ def _write_result(mesh, st, prev, lattice, surface, settings, inp) -> None:
                               edges=lattice.edges() if lattice is not None else None)
     if len(mesh.materials) > 1:  # per-triangle material of the face it tessellates
         lattice = lattice or surface.lattice(settings["resolution"])
-        mesh_io.write_material_indices(mesh, inp.materials[lattice.triangle_face])
+        faces = surface.face_map[lattice.triangle_face]  # the input face of each triangle
+        mesh_io.write_material_indices(mesh, inp.materials[faces])
     mesh_io.write_snapshot(mesh, inp)
 
 

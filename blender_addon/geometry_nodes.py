@@ -140,9 +140,18 @@ def get_error(mod) -> str:
     return str(mod.get(_identifiers(mod.node_group)["Error"], ""))
 
 
-def set_error(mod, message: str) -> bool:
+def get_warning(mod) -> str:
+    return str(mod.get(_identifiers(mod.node_group)["Warning"], ""))
+
+
+def set_warning(mod, message: str) -> bool:
+    """Show `message` as the modifier's warning line ("" clears it). True if it changed."""
+    return set_error(mod, message, "Warning")
+
+
+def set_error(mod, message: str, socket: str = "Error") -> bool:
     """Show `message` as the modifier's error ("" clears it). True if it changed."""
-    key = _identifiers(mod.node_group)["Error"]
+    key = _identifiers(mod.node_group)[socket]
     if str(mod.get(key, "")) == message:
         return False
     mod[key] = message

@@ -30,7 +30,8 @@ SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
 NODE_GROUP_NAME = "GERBS Blending Surface"
 MODIFIER_NAME = "GERBS Blending Surface"
 GROUP_TAG = "gerbs_group_version"  # custom property on the node group
-GROUP_VERSION = 3  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest Shape
+GROUP_VERSION = 4  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest Shape;
+# 4: Merge by Distance, Merge Distance and the Warning line
 RESULT_TAG = "gerbs_result"  # custom property on each hidden result object and its mesh
 RESULT_NAME = "GERBS Result"  # prefix of the result object / mesh names
 
@@ -104,6 +105,12 @@ SETTINGS = (
                            "fast linear deformation of it, like a bound deform modifier"),
     SocketSpec("use_normals", "Use Custom Normals", "NodeSocketBool", False,
                description="Use the base mesh's vertex normals as Hermite data"),
+    SocketSpec("merge", "Merge by Distance", "NodeSocketBool", False,
+               description="Weld vertices closer than Merge Distance before building (unwelded "
+                           "seams of imports: split UVs or normals); off: such seams stay open"),
+    SocketSpec("merge_distance", "Merge Distance", "NodeSocketFloat", 1.0e-4, 0.0, 1.0e6,
+               "Largest distance of vertices welded by Merge by Distance (0: only coincident "
+               "ones)"),
     SocketSpec("memory_budget", "Memory Budget (MB)", "NodeSocketFloat", 2000.0, 1.0, 1.0e6,
                "Largest memory (MB) a build may use; larger builds are refused with an error",
                scale=1.0e6, shape=False),
@@ -113,6 +120,8 @@ INTERNAL = (
                description="Hidden object holding the surface (written by the add-on)"),
     SocketSpec("error", "Error", "NodeSocketString", "", hidden=True,
                description="Last error of the add-on; shown as a node warning"),
+    SocketSpec("warning", "Warning", "NodeSocketString", "", hidden=True,
+               description="What the last build repaired in the mesh; shown as a node warning"),
 )
 SHAPE_SETTINGS = tuple(s for s in SETTINGS if s.shape)
 # The settings the result was built from (written by the add-on after each build;

@@ -230,8 +230,11 @@ def build(group) -> None:
     no_error = t.boolean("NOT", has_error)
     stale = t.warning(t.boolean("AND", no_error, t.boolean("NOT", fresh)), ids.STALE_MESSAGE,
                       "WARNING")
+    repaired = t.warning(t.boolean("AND", no_error, fresh, t.compare(
+        "STRING", "NOT_EQUAL", gin.outputs["Warning"], "")), gin.outputs["Warning"], "WARNING")
+    used = t.boolean("OR", repaired, t.boolean("NOT", repaired))  # (evaluates the warning)
     switch = t.node("GeometryNodeSwitch", input_type="GEOMETRY")
-    t.link(t.boolean("AND", no_error, t.boolean("NOT", stale)), switch.inputs["Switch"])
+    t.link(t.boolean("AND", no_error, t.boolean("NOT", stale), used), switch.inputs["Switch"])
     t.link(base, switch.inputs["False"])
     t.link(_strip_snapshot(t, result), switch.inputs["True"])
     t.link(switch.outputs[0], gout.inputs[0])

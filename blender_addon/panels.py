@@ -36,6 +36,8 @@ class GERBS_PT_status(bpy.types.Panel):
             box.alert = True
             box.label(text=info["error"], icon="ERROR")
         elif "points" in info:
+            if info["warning"]:
+                layout.label(text=info["warning"], icon="INFO")
             layout.label(text=f"{info['points']} points, {info['triangles']} triangles")
             layout.label(text=f"build {info['build_seconds']:.3f} s, "
                               f"update {info['update_seconds'] * 1000:.1f} ms")

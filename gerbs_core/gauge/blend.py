@@ -7,16 +7,17 @@ lines, as wide as a rigorous closed-form bound allows (:func:`closed_form_fit`),
 kappa * rho <= rho~ <= rho holds by construction, not by sampling.
 :func:`blend_check` is an independent sampled certificate (tests).
 
-:func:`build_blend_many` builds the envelopes of many stars at once: the per-star
-bookkeeping is a few array operations, the corner fits (the iterative part) run once
-over all corners of all stars.
+:func:`build_blend_ragged` builds the envelopes of many stars at once, in ragged arrays:
+every step (merging collinear edges, the corners' scales and certified widths, the knots)
+is one array operation over all stars.
 """
 from __future__ import annotations
 
 import numpy as np
 
 __all__ = ["CONVEX_SCALE", "adaptive_scales", "blend_check", "closed_form_fit",
-           "fit_blend_widths", "overshoot_profile", "build_blend", "build_blend_many"]
+           "fit_blend_widths", "overshoot_profile", "build_blend", "build_blend_ragged",
+           "RaggedBlend"]
 
 _BLEND_SAMPLES = 24       # sub-intervals per side in blend_check
 _BLEND_SHRINK = 0.85      # factor applied to a failing side's width
@@ -228,127 +229,140 @@ def overshoot_profile(kernel, n=513, mirrored=False):
     return G
 
 
-def _star_corners(theta, normal, dist, closed, span):
-    """The corners of one star after merging collinear edges (super-pieces), or None
-    (a closed star without a corner). Returns a dict of per-super-piece arrays (t0, t1,
-    sn, sp: angular range, line normal and distance) and per-corner arrays (cj, pj: the
-    super-pieces after / before the corner; nA, nB: line normals relative to the corner
-    ray; roomA, roomB: the widest transition allowed on each side)."""
-    K = len(dist)
-    n, p = normal, dist
+def _segments(ptr):
+    """(owner (N,), rank (N,)) of a ragged layout with offsets ptr (S+1,): the segment of
+    every element and its position within it."""
+    counts = np.diff(ptr)
+    owner = np.repeat(np.arange(len(counts)), counts)
+    return owner, np.arange(int(ptr[-1])) - ptr[:-1][owner]
+
+
+class RaggedBlend:
+    """The blend envelopes of S stars in ragged arrays (result of :func:`build_blend_ragged`).
+
+    ``ok`` (S,): certified (the others need a fallback construction); for those stars
+    ``knot_ptr`` (S+1,) offsets into ``knots``, ``line_m`` and ``line_inv`` (the local lines
+    u = line_inv cos(theta - line_m)), ``rmin`` / ``rmax`` (S,) the certified bounds of
+    R = u~ / u_exact.
+    """
+
+    def __init__(self, ok, knot_ptr, knots, line_m, line_inv, rmin, rmax):
+        self.ok, self.knot_ptr, self.knots = ok, knot_ptr, knots
+        self.line_m, self.line_inv, self.rmin, self.rmax = line_m, line_inv, rmin, rmax
+
+
+def build_blend_ragged(theta, normal, dist, ptr, closed, span, kappa, kernel) -> RaggedBlend:
+    """Edge lines (pulled in by c) blended directly across each corner, for S stars at once.
+
+    theta (N,): the stars' polar vertex angles, star i at theta[ptr[i]:ptr[i+1]] (K_i + 1
+    vertices, K_i pieces); normal, dist (N - S,): the pieces' lines (star i's pieces at
+    ptr[i] - i ...); closed (S,) bool, span (S,). Consecutive collinear pieces are merged
+    (super-pieces); every remaining corner gets ONE GERBS transition between its two
+    lines, initially half of each adjacent super-piece (the whole of it at an open end),
+    narrowed by :func:`fit_blend_widths` until certified. All array operations run over
+    all stars at once (no per-star Python work).
+    """
+    theta, normal, dist = (np.asarray(a, dtype=np.float64) for a in (theta, normal, dist))
+    ptr = np.asarray(ptr, dtype=np.int64)
+    closed = np.asarray(closed, dtype=bool)
+    span = np.asarray(span, dtype=np.float64)
+    S = len(ptr) - 1
+    K = np.diff(ptr) - 1                                  # pieces per star
+    pptr = ptr - np.arange(S + 1)                         # piece offsets
+    pstar, k = _segments(pptr)                            # star and index of every piece
     # corners between piece k-1 and k (closed: all k, piece -1 = K-1 one period back)
-    ks = np.arange(K) if closed else np.arange(1, K)
-    prev = (ks - 1) % K
-    nprev = n[prev] - np.where(ks == 0, span, 0.0)
-    tau = n[ks] - nprev
-    straight = (np.abs(tau) <= 1e-10) & (np.abs(p[ks] - p[prev]) <= 1e-10 * p[ks])
-    real = ks[~straight]
-    if closed and real.size == 0:
-        return None
-    # super-pieces: runs of pieces between real corners, one line each
-    if closed:
-        starts = real
-        ends = np.append(real[1:], real[0] + K)          # piece index of the next corner
-        th_ext = np.concatenate([theta[:-1], theta[:-1] + span, [theta[-1] + span]])
-    else:
-        starts = np.concatenate([[0], real])
-        ends = np.concatenate([real, [K]])
-        th_ext = theta
-    t0, t1 = th_ext[starts], th_ext[ends]
-    sn = n[starts % K] + np.where(starts >= K, span, 0.0)
-    sp = p[starts % K]
-    P = len(starts)
-    # corner j sits at the start of super-piece j (closed: all; open: j >= 1)
-    cj = np.arange(P) if closed else np.arange(1, P)
-    pj = (cj - 1) % P
+    is_corner = closed[pstar] | (k >= 1)
+    prev = pptr[:-1][pstar] + (k - 1) % K[pstar]
+    nprev = normal[prev] - np.where(k == 0, span[pstar], 0.0)
+    tau = normal - nprev
+    straight = (np.abs(tau) <= 1e-10) & (np.abs(dist - dist[prev]) <= 1e-10 * dist)
+    real = is_corner & ~straight
+    n_real = np.bincount(pstar[real], minlength=S)
+    ok = ~(closed & (n_real == 0))
+    # super-pieces: closed stars start one at every real corner; open stars at piece 0 and
+    # at every real corner
+    start = real | (~closed[pstar] & (k == 0))
+    start &= ok[pstar]
+    sp_piece = np.flatnonzero(start)                      # first piece of each super-piece
+    sstar = pstar[sp_piece]
+    P = np.bincount(sstar, minlength=S)
+    sptr = np.concatenate([[0], np.cumsum(P)])
+    _, j = _segments(sptr)
+    last = j == P[sstar] - 1
+    nxt = np.where(last, sptr[:-1][sstar], np.arange(len(sp_piece)) + 1)
+    k0 = k[sp_piece]
+    # end piece index (relative to the star): the next super-piece's start, + K on wrapping
+    k1 = np.where(last, np.where(closed[sstar], k[sp_piece[nxt]] + K[sstar], K[sstar]),
+                  k[sp_piece[nxt]])
+    vbase = ptr[:-1][sstar]
+    Ks = K[sstar]
+    t0 = theta[vbase + k0]
+    t1 = theta[vbase + k1 % np.maximum(Ks, 1)] + span[sstar] * (k1 // np.maximum(Ks, 1))
+    t1 = np.where(~closed[sstar], theta[vbase + np.minimum(k1, Ks)], t1)
+    sn, sp = normal[sp_piece], dist[sp_piece]
+    # corners: at the start of every super-piece of a closed star, of all but the first
+    # of an open star; the super-piece before it: pj
+    cmask = closed[sstar] | (j >= 1)
+    cj = np.flatnonzero(cmask)
+    pj = np.where(j[cj] == 0, cj + P[sstar[cj]] - 1, cj - 1)
     ctheta = t0[cj]
-    nA = sn[pj] - (np.where(cj == 0, span, 0.0) if closed else 0.0) - ctheta
+    wrap = closed[sstar[cj]] & (j[cj] == 0)
+    nA = sn[pj] - np.where(wrap, span[sstar[cj]], 0.0) - ctheta
     nB = sn[cj] - ctheta
     width = t1 - t0
-    # room: half an edge between two corners, the whole edge next to an open end
-    has_start = np.zeros(P, dtype=bool)
-    has_end = np.zeros(P, dtype=bool)
-    has_start[cj] = True
-    has_end[pj] = True
+    has_start = cmask
+    has_end = closed[sstar] | ~last
     roomA = np.where(has_start[pj], 0.5, 1.0) * width[pj]
     roomB = np.where(has_end[cj], 0.5, 1.0) * width[cj]
-    if not closed:
-        roomA = np.where(pj == 0, width[pj], roomA)
-        roomB = np.where(cj == P - 1, width[cj], roomB)
-    return {"t0": t0, "t1": t1, "sn": sn, "sp": sp, "cj": cj, "pj": pj, "nA": nA, "nB": nB,
-            "roomA": roomA, "roomB": roomB, "closed": closed, "span": span}
-
-
-def _assemble(s, c, wa, wb, kappa):
-    """(knots, m, a, b, Rmin, Rmax) of one star from its corners' scales and widths."""
-    t0, t1, sn, sp, cj, pj = s["t0"], s["t1"], s["sn"], s["sp"], s["cj"], s["pj"]
-    span = s["span"]
-    P = len(t0)
-    # pure stretch of super-piece k: [t0 + b(corner at its start), t1 - a(corner at its end)]
-    bs = np.zeros(P)
-    ae = np.zeros(P)
+    c = adaptive_scales(len(sp_piece), pj, cj, nA, sp[pj], nB, sp[cj], roomA, roomB,
+                        kappa, kernel)
+    wa, wb, cok, _, _ = fit_blend_widths(nA, sp[pj], c[pj], nB, sp[cj], c[cj], roomA, roomB,
+                                         kappa, kernel)
+    ok &= np.bincount(sstar[cj][~cok], minlength=S) == 0
+    # pure stretch of super-piece j: [t0 + b(corner at its start), t1 - a(corner at its end)]
+    bs = np.zeros(len(sp_piece))
+    ae = np.zeros(len(sp_piece))
     bs[cj] = wb
     ae[pj] = wa
     lo, hi = t0 + bs, t1 - ae
-    kn = np.stack([lo, hi], axis=1).ravel()
-    mm = np.repeat(sn, 2)
-    cc = np.repeat(c * sp, 2)
-    if s["closed"]:
-        kn = np.append(kn, lo[0] + span)
-        mm = np.append(mm, sn[0] + span)
-        cc = np.append(cc, c[0] * sp[0])
+    # knots per star: lo_0 hi_0 lo_1 hi_1 ... (closed: and lo_0 + span, one period on)
+    n_kn = np.where(P > 0, 2 * P + closed, 0)
+    kptr = np.concatenate([[0], np.cumsum(n_kn)])
+    kstar, kr = _segments(kptr)
+    jj = sptr[:-1][kstar] + np.minimum(kr // 2, np.maximum(P[kstar] - 1, 0))
+    extra = kr == 2 * P[kstar]                            # the closing knot
+    jj = np.where(extra, sptr[:-1][kstar], jj)
+    kn = np.where(extra, lo[jj] + span[kstar], np.where(kr % 2 == 0, lo[jj], hi[jj]))
+    mm = np.where(extra, sn[jj] + span[kstar], sn[jj])
+    cc = c[jj] * sp[jj]
     # a pure stretch of zero length is one knot
-    keep = np.concatenate([[True], np.diff(kn) > 1e-12 * max(span, 1e-300)])
-    kn, mm, cc = kn[keep], mm[keep], cc[keep]
-    if np.any(np.diff(kn) <= 0):
-        return None
+    dk = np.diff(kn, prepend=np.nan)
+    keep = (kr == 0) | (dk > 1e-12 * np.maximum(span[kstar], 1e-300))
+    kn, mm, cc, kstar = kn[keep], mm[keep], cc[keep], kstar[keep]
+    kptr = np.concatenate([[0], np.cumsum(np.bincount(kstar, minlength=S))])
+    _, kr = _segments(kptr)
+    inc = np.diff(kn, prepend=np.nan) > 0
+    ok &= np.bincount(kstar[(kr > 0) & ~inc], minlength=S) == 0
     inv = 1.0 / c
+    lo_inv = np.full(S, np.inf)
+    hi_inv = np.full(S, -np.inf)
+    np.minimum.at(lo_inv, sstar, inv)
+    np.maximum.at(hi_inv, sstar, inv)
+    has_c = np.bincount(sstar[cj], minlength=S) > 0
     # the transitions are certified in [1, 1/kappa] (closed_form_fit), pure stretches 1/c
-    rmin = min(1.0, float(inv.min())) if len(cj) else float(inv.min())
-    rmax = max(1.0 / kappa, float(inv.max())) if len(cj) else float(inv.max())
-    return kn, mm, 1.0 / cc, np.zeros_like(cc), rmin, rmax
-
-
-def build_blend_many(stars, kappa, kernel):
-    """:func:`build_blend` for a sequence of stars (theta, normal, dist, closed, span):
-    a list of results (each a tuple or None), the corner fits done once for all."""
-    prep = [_star_corners(np.asarray(t, float), np.asarray(n, float), np.asarray(d, float),
-                          bool(cl), float(sp)) for t, n, d, cl, sp in stars]
-    live = [s for s in prep if s is not None]
-    out = [None] * len(prep)
-    if not live:
-        return out
-    n_pieces = np.array([len(s["t0"]) for s in live])
-    n_corners = np.array([len(s["cj"]) for s in live])
-    poff = np.concatenate([[0], np.cumsum(n_pieces)])
-    coff = np.concatenate([[0], np.cumsum(n_corners)])
-    cat = {k: np.concatenate([s[k] for s in live]) for k in ("nA", "nB", "roomA", "roomB", "sp")}
-    pj = np.concatenate([s["pj"] + o for s, o in zip(live, poff)])
-    cj = np.concatenate([s["cj"] + o for s, o in zip(live, poff)])
-    sp = cat["sp"]
-    c = adaptive_scales(int(poff[-1]), pj, cj, cat["nA"], sp[pj], cat["nB"], sp[cj],
-                        cat["roomA"], cat["roomB"], kappa, kernel)
-    wa, wb, ok, _, _ = fit_blend_widths(cat["nA"], sp[pj], c[pj], cat["nB"], sp[cj], c[cj],
-                                        cat["roomA"], cat["roomB"], kappa, kernel)
-    j = 0
-    for i, s in enumerate(prep):
-        if s is None:
-            continue
-        a, b = coff[j], coff[j + 1]
-        if ok[a:b].all():
-            out[i] = _assemble(s, c[poff[j]:poff[j + 1]], wa[a:b], wb[a:b], kappa)
-        j += 1
-    return out
+    rmin = np.where(has_c, np.minimum(1.0, lo_inv), lo_inv)
+    rmax = np.where(has_c, np.maximum(1.0 / kappa, hi_inv), hi_inv)
+    return RaggedBlend(ok, kptr, kn, mm, 1.0 / cc, rmin, rmax)
 
 
 def build_blend(theta, normal, dist, closed, span, kappa, kernel):
-    """Edge lines (pulled in by c_k) blended directly across each corner.
-
-    Consecutive collinear edges are merged; every remaining corner gets ONE GERBS
-    transition between its two lines, as wide as the certified bound allows
-    (initially half of each adjacent edge's angle, the whole edge at an open
-    end), shrunk by :func:`fit_blend_widths`. Returns (knots, m, a, b, Rmin,
-    Rmax) (R = u~ / u_exact over everything: rho~/rho in [1/Rmax, 1/Rmin]) or
-    None if some corner cannot be certified.
-    """
-    return build_blend_many([(theta, normal, dist, closed, span)], kappa, kernel)[0]
+    """:func:`build_blend_ragged` for one star: (knots, m, a, b, Rmin, Rmax) (local lines
+    u_j = a_j cos(theta - m_j) + b_j, b = 0; R = u~ / u_exact over everything: rho~/rho in
+    [1/Rmax, 1/Rmin]) or None if some corner cannot be certified."""
+    theta = np.asarray(theta, dtype=np.float64)
+    rb = build_blend_ragged(theta, normal, dist, [0, len(theta)], [closed], [span], kappa,
+                            kernel)
+    if not rb.ok[0]:
+        return None
+    a = rb.line_inv
+    return rb.knots, rb.line_m, a, np.zeros_like(a), float(rb.rmin[0]), float(rb.rmax[0])

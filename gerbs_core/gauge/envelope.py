@@ -55,15 +55,14 @@ import math
 
 import numpy as np
 
-from .blend import build_blend_many
-from .fallbacks import build_constant, build_fillet, interval_ratios, line_through
+from .blend import build_blend
+from .fallbacks import build_constant, build_fillet, interval_ratios
 from ..errors import InvalidParameterError, InvalidPointSetError
 
-__all__ = ["RadialEnvelope", "EnvelopeTable"]
+__all__ = ["RadialEnvelope"]
 
 TWO_PI = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
-_RTOL = 1e-12        # rounding slack in the certified bounds
 
 
 def _check_unit_interval(name, value, closed_right):
@@ -115,28 +114,24 @@ class RadialEnvelope:
         if self.exact:
             self._finish_exact()
         else:
-            self._finish_smooth(build_blend_many([self._blend_input()], self.kappa,
-                                                 self.kernel)[0])
+            self._finish_smooth(build_blend(self.theta, self.normal, self.dist, self.closed,
+                                            self.span, self.kappa, self.kernel))
 
     @classmethod
-    def many(cls, stars, closed, kappa=0.8, shrink=0.95, kernel=None, exact=False):
-        """Envelopes of many stars at once (the same as one :class:`RadialEnvelope` each,
-        bitwise): ``stars`` a sequence of (theta, radius) pairs, ``closed`` a bool per star.
-        The corner fits of all stars run as one vectorized pass."""
-        out = []
-        for (theta, radius), cl in zip(stars, closed):
-            env = cls.__new__(cls)
-            env._setup(theta, radius, cl, kappa, shrink, kernel, exact)
-            out.append(env)
-        if exact:
-            for env in out:
-                env._finish_exact()
-            return out
-        blends = build_blend_many([env._blend_input() for env in out],
-                                  out[0].kappa if out else kappa, out[0].kernel if out else None)
-        for env, bl in zip(out, blends):
-            env._finish_smooth(bl)
-        return out
+    def _adopt(cls, theta, radius, closed, knots, line_m, line_a, line_b, method, min_ratio,
+               kappa, shrink, exact, kernel):
+        """An envelope from already built parts (:meth:`EnvelopeTable.envelope`)."""
+        from .envelope_table import polar_pieces
+        env = cls.__new__(cls)
+        env.closed, env.kappa, env.shrink, env.exact, env.kernel = (closed, kappa, shrink,
+                                                                    exact, kernel)
+        env.theta, env.radius = theta, radius
+        env.span = float(theta[-1] - theta[0])
+        env.normal, env.dist = polar_pieces(theta, radius, np.array([0, len(theta)]))
+        env.knots, env.line_m, env.line_a, env.line_b = knots, line_m, line_a, line_b
+        env.method, env.min_ratio, env._curv = method, min_ratio, None
+        env._freeze()
+        return env
 
     def _setup(self, theta, radius, closed, kappa, shrink, kernel, exact):
         """Validation and the exact radius's pieces (normal, dist)."""
@@ -153,26 +148,16 @@ class RadialEnvelope:
             from ..kernels import ERBS
             kernel = ERBS()
         self.kernel = kernel
-        _validate_polar(theta, radius, self.closed)
+        from .envelope_table import polar_pieces, validate_stars
+        one = np.array([0, len(theta)])
+        validate_stars(theta, radius, one, np.array([self.closed]))
         self.theta, self.radius = theta, radius
         self.theta.setflags(write=False)
         self.radius.setflags(write=False)
         self.span = float(theta[-1] - theta[0])
-        # pieces: edge k from vertex k to vertex k+1, in the frame of vertex k
-        d = np.diff(theta)
-        r0, r1 = radius[:-1], radius[1:]
-        m_loc, q = line_through(r0, 0.0 * r0, r1 * np.cos(d), r1 * np.sin(d))
-        self.normal = theta[:-1] + m_loc
-        self.dist = q
-        bad = np.flatnonzero(~(q > _RTOL * np.maximum(r0, r1)))
-        if bad.size:
-            raise InvalidPointSetError(
-                "the centre lies on (the line of) a boundary edge; ring indices",
-                np.unique(np.concatenate([bad, bad + 1])))
+        # pieces: edge k from vertex k to vertex k+1
+        self.normal, self.dist = polar_pieces(theta, radius, one)
         self._curv = None
-
-    def _blend_input(self):
-        return self.theta, self.normal, self.dist, self.closed, self.span
 
     def _freeze(self):
         for a in ("knots", "line_m", "line_a", "line_b", "normal", "dist"):
@@ -421,62 +406,6 @@ def _eval_pieces(x, t0, t1, m0, m1, A0, A1, B0, B1, kernel, nmax, exact):
     return out
 
 
-class EnvelopeTable:
-    """Many :class:`RadialEnvelope` packed into padded arrays, evaluated in one vectorized
-    pass (the same numbers as each envelope's :meth:`RadialEnvelope.u_derivs`).
-
-    Attributes (E envelopes, K the most knots): ``knots`` (E, K) padded with +inf,
-    ``n_knots`` (E,), ``line_m``, ``line_a``, ``line_b`` (E, K), ``closed`` (E,),
-    ``span`` (E,), ``first`` / ``last`` (E,) the sector's end angles (open envelopes are
-    evaluated inside them), ``exact`` and ``kernel`` (shared by all).
-    """
-
-    def __init__(self, envelopes):
-        envelopes = list(envelopes)
-        if not envelopes:
-            raise InvalidParameterError("envelopes", "need at least one envelope")
-        E = len(envelopes)
-        K = max(len(e.knots) for e in envelopes)
-        self.knots = np.full((E, K), np.inf)
-        self.line_m, self.line_a, self.line_b = (np.zeros((E, K)) for _ in range(3))
-        self.n_knots = np.array([len(e.knots) for e in envelopes], dtype=np.int64)
-        for i, e in enumerate(envelopes):
-            n = len(e.knots)
-            self.knots[i, :n] = e.knots
-            self.line_m[i, :n], self.line_a[i, :n], self.line_b[i, :n] = \
-                e.line_m, e.line_a, e.line_b
-        self.closed = np.array([e.closed for e in envelopes])
-        self.span = np.array([e.span for e in envelopes])
-        self.first = np.array([e.theta[0] for e in envelopes])
-        self.last = np.array([e.theta[-1] for e in envelopes])
-        self.exact = envelopes[0].exact
-        self.kernel = envelopes[0].kernel
-        for a in ("knots", "line_m", "line_a", "line_b", "n_knots", "closed", "span",
-                  "first", "last"):
-            getattr(self, a).setflags(write=False)
-
-    def u_derivs(self, env, theta, nmax=2):
-        """u~ and its derivatives (nmax+1, *theta.shape) of envelope ``env[i]`` at
-        ``theta[i]`` (env an int array broadcastable to theta). Closed envelopes are
-        periodic; open ones are evaluated at theta clipped to their sector (round-off of
-        the unfolded angle must not extrapolate the end lines)."""
-        theta = np.asarray(theta, dtype=np.float64)
-        env = np.broadcast_to(np.asarray(env, dtype=np.int64), theta.shape).ravel()
-        x = theta.ravel()
-        kn = self.knots[env]                                        # (N, K)
-        t0 = kn[:, 0]
-        x = np.where(self.closed[env], t0 + np.mod(x - t0, self.span[env]),
-                     np.clip(x, self.first[env], self.last[env]))
-        j = np.clip((kn <= x[:, None]).sum(axis=1) - 1, 0, self.n_knots[env] - 2)
-        j1 = j + 1
-        out = _eval_pieces(x, kn[np.arange(len(x)), j], kn[np.arange(len(x)), j1],
-                           self.line_m[env, j], self.line_m[env, j1],
-                           self.line_a[env, j], self.line_a[env, j1],
-                           self.line_b[env, j], self.line_b[env, j1],
-                           self.kernel, nmax, self.exact)
-        return out.reshape((nmax + 1,) + theta.shape)
-
-
 def _reciprocal_derivs(u):
     """Derivatives of 1/u from those of u (orders 0..3), stacked like ``u``."""
     nmax = len(u) - 1
@@ -490,27 +419,3 @@ def _reciprocal_derivs(u):
     if nmax >= 3:
         out[3] = -u[3] * inv ** 2 + 6 * u[1] * u[2] * inv ** 3 - 6 * u[1] ** 3 * inv ** 4
     return out
-
-
-def _validate_polar(theta, radius, closed):
-    if theta.ndim != 1 or len(theta) < 2:
-        raise InvalidParameterError("theta", "need at least 2 boundary vertices (K+1 >= 2)")
-    if closed and len(theta) < 3:
-        raise InvalidPointSetError("a closed star needs at least 2 edges (K+1 >= 3 vertices)")
-    bad = np.flatnonzero(~(np.isfinite(theta) & np.isfinite(radius)))
-    if bad.size:
-        raise InvalidPointSetError("non-finite boundary vertex at indices", bad)
-    bad = np.flatnonzero(~(radius > 0))
-    if bad.size:
-        raise InvalidPointSetError("boundary vertex radius must be > 0 at indices", bad)
-    d = np.diff(theta)
-    bad = np.flatnonzero(~((d > 0) & (d < math.pi)))
-    if bad.size:
-        raise InvalidPointSetError(
-            "not star-shaped w.r.t. the centre: each edge must subtend an angle in (0, pi); "
-            "vertex indices", np.unique(np.concatenate([bad, bad + 1])))
-    if closed:
-        if abs(radius[-1] - radius[0]) > 1e-9 * radius[0]:
-            raise InvalidPointSetError(
-                "closed star: the last vertex must repeat the first (radius differs)",
-                [0, len(radius) - 1])

@@ -25,10 +25,16 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from .coupling_local import local_parts, neighbourhood, vertex_graph
 from .fits import pinned_normal_inverse
 from .monomials import monomial_exponents, n_monomials
 
-__all__ = ["CoupledFits", "coupled_fits", "identity_fits"]
+__all__ = ["CoupledFits", "coupled_fits", "identity_fits", "LOCAL_REACH"]
+
+# hops in the data-fit graph (each up to 2 rings) around moved vertices within which a
+# column of the map and all its intermediates lie, with a margin: data fit 1 hop, each
+# of the (2) sweeps at most 1 more, the margin 1 (tested against the operator)
+LOCAL_REACH = 4
 
 
 class CoupledFits:
@@ -46,6 +52,7 @@ class CoupledFits:
         self.damping = float(damping)
         self._parts = parts
         self.shape = self.chosen.shape
+        self._last = None     # (key, columns): memo of the last columns() request
 
     def __call__(self, X):
         """Coefficients (V MMAX, k) for positions X (V, k) or (V,)."""
@@ -53,21 +60,7 @@ class CoupledFits:
 
     def _map(self, Y):
         """The map applied to Y: a dense (V, k) array, or a sparse (V, V) matrix."""
-        c = self.chosen @ Y
-        if not self.sweeps:
-            return c
-        p = self._parts
-        Xs = p["rows"] @ Y                                   # X_v of every row
-        fixed = p["rhs"] @ Y + p["BsT"] @ (p["Wt"] @ (p["cage"] @ Y - Xs) - p["Wa"] @ Xs)
-        d = self.damping
-        for _ in range(self.sweeps):
-            l = Xs + p["Bu"] @ c                              # l_v at the rows' samples
-            T = p["gather"] @ (p["agg"] @ l)                  # sum of the sample's P l
-            new = p["blk"] @ (fixed + p["BsT"] @ (p["Dp"] @ T - p["Dpp"] @ l))
-            c = (1.0 - d) * c + d * new
-            if sp.issparse(c):
-                c.eliminate_zeros()
-        return c
+        return _apply(self.chosen, self._parts, self.sweeps, self.damping, Y)
 
     @cached_property
     def operator(self) -> sp.csr_matrix:
@@ -84,18 +77,76 @@ class CoupledFits:
         op.eliminate_zeros()
         return op
 
+    def columns(self, cols) -> sp.csc_matrix:
+        """Columns ``cols`` (m,) of :attr:`operator` as a csc (V MMAX, m), without making
+        the operator: the map applied to those unit vectors on a neighbourhood of them
+        (:mod:`gerbs_core.mesh.coupling_local`: cost ~ the neighbourhood, not the mesh),
+        with the same row-sum correction (to round-off). The last request is memoized
+        (a drag moves the same vertices frame after frame)."""
+        cols = np.asarray(cols, dtype=np.int64).ravel()
+        key = cols.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        if self.operator_built:
+            out = self.operator.tocsc()[:, cols]
+        else:
+            out = self._columns(cols)
+        self._last = (key, out)
+        return out
+
+    def _columns(self, cols):
+        V, m = self.shape[1], len(cols)
+        mmax = self.shape[0] // V
+        verts = (neighbourhood(self._graph, cols, LOCAL_REACH) if self.sweeps
+                 else np.arange(V))
+        if len(verts) > V // 2:                       # most of the mesh: the map itself
+            chosen, parts, R, verts = self.chosen, self._parts, np.arange(V * mmax), np.arange(V)
+        else:
+            chosen, parts, R = local_parts(self.chosen, self._parts, verts, mmax,
+                                           self._owner)
+        at = np.searchsorted(verts, cols)
+        unit = sp.csr_matrix((np.ones(m), (at, np.arange(m))), shape=(len(verts), m))
+        local = sp.csr_matrix(_apply(chosen, parts, self.sweeps, self.damping, unit))
+        # minus the row sums of the moved vertices' own rows, in their columns: the same
+        # correction as the operator's (these rows' supports lie inside the neighbourhood)
+        sums = _apply(chosen, parts, self.sweeps, self.damping, np.ones((len(verts), 1)))[:, 0]
+        own = np.flatnonzero(np.isin(R // mmax, cols))
+        where = np.argsort(cols)[np.searchsorted(np.sort(cols), R[own] // mmax)]
+        local = local - sp.csr_matrix((sums[own], (own, where)), shape=local.shape)
+        lc = local.tocoo()
+        out = sp.csc_matrix((lc.data, (R[lc.row], lc.col)), shape=(self.shape[0], m))
+        out.eliminate_zeros()
+        return out
+
+    @cached_property
+    def _graph(self):
+        return vertex_graph(self.chosen, self.shape[1])
+
+    @cached_property
+    def _owner(self):
+        """Per vertex its sample-corner rows (csc of the rows' vertex incidence)."""
+        return self._parts["rows"].tocsc()
+
     @property
     def operator_built(self) -> bool:
         return "operator" in self.__dict__
 
-    @property
-    def nnz_estimate(self) -> int:
-        """Entries of :attr:`operator`: exact once built, else an upper estimate (each sweep
-        reaches one ring further; measured 1.0-3.8x the chosen fits' entries with 2 sweeps
-        on the test meshes, estimated 1 + 1.5 per sweep)."""
-        if self.operator_built:
-            return int(self.operator.nnz)
-        return int(self.chosen.nnz * (1.0 + 1.5 * self.sweeps))
+
+def _apply(chosen, p, sweeps, d, Y):
+    """The map (module docstring) with matrices ``chosen``, ``p`` applied to Y."""
+    c = chosen @ Y
+    if not sweeps:
+        return c
+    Xs = p["rows"] @ Y                                   # X_v of every row
+    fixed = p["rhs"] @ Y + p["BsT"] @ (p["Wt"] @ (p["cage"] @ Y - Xs) - p["Wa"] @ Xs)
+    for _ in range(sweeps):
+        l = Xs + p["Bu"] @ c                              # l_v at the rows' samples
+        T = p["gather"] @ (p["agg"] @ l)                  # sum of the sample's P l
+        new = p["blk"] @ (fixed + p["BsT"] @ (p["Dp"] @ T - p["Dpp"] @ l))
+        c = (1.0 - d) * c + d * new
+        if sp.issparse(c):
+            c.eliminate_zeros()
+    return c
 
 
 def identity_fits(chosen) -> CoupledFits:
@@ -124,15 +175,19 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax) -> CoupledFi
     V = len(degrees)
     mmax = n_monomials(dmax)
     deg = monomial_exponents(dmax).sum(1)
-    SC = len(smp.vertex)
-    active = np.arange(mmax)[None, :] < np.array([n_monomials(d) for d in degrees])[:, None]
+    SC, L = len(smp.vertex), smp.n_samples
     P, w, s = smp.psi, smp.weight, smp.sharp
     wa = rule.mu * w * P * (1.0 - P)                  # agreement weight of each row
     wt = rule.lam * w * s * P                         # tension weight
-    Bs = smp.Bs * active[smp.vertex]
-    rowidx = (smp.vertex[:, None] * mmax + np.arange(mmax)).ravel()
-    BsT = sp.csr_matrix((Bs.ravel(), (rowidx, np.repeat(np.arange(SC), mmax))),
-                        shape=(V * mmax, SC))
+    # the rows' monomials, only those of each vertex's own degree (the others have zero
+    # coefficients): Bu (SC, V MMAX) csr and the scaled Bs^T (V MMAX, SC) csc, built
+    # directly in compressed form (no coo sort: these are the largest matrices)
+    active = (np.arange(mmax)[None, :]
+              < np.array([n_monomials(d) for d in degrees])[smp.vertex][:, None])
+    cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active]
+    ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))])
+    Bu = sp.csr_matrix((smp.Bu[active], cols, ptr), shape=(SC, V * mmax))
+    BsT = sp.csc_matrix((smp.Bs[active], cols, ptr), shape=(V * mmax, SC))
     # per vertex normal matrices of data + agreement + tension (block diagonal B^T W B)
     N = normals.copy()
     G2 = (BsT @ sp.diags(wa + wt) @ BsT.T).tocoo()
@@ -143,18 +198,17 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax) -> CoupledFi
         M = n_monomials(d)
         Pinv[vs, :M, :M] = pinned_normal_inverse(N[vs, :M, :M], d)
     Pinv = Pinv / h[:, None, None] ** deg[None, :, None]      # unscale: c = scaled / h^|m|
-    rows = sp.csr_matrix((np.ones(SC), (np.arange(SC), smp.vertex)), shape=(SC, V))
-    gather = sp.csr_matrix((np.ones(SC), (np.arange(SC), smp.sample)), shape=(SC, smp.n_samples))
+    one = np.arange(SC + 1)
+    gather = sp.csr_matrix((np.ones(SC), smp.sample, one), shape=(SC, L))
     parts = {
         "blk": _block_diagonal(Pinv),
         "rhs": rhs.tocsr(),
         "BsT": BsT,
-        "rows": rows,
+        "rows": sp.csr_matrix((np.ones(SC), smp.vertex, one), shape=(SC, V)),
         "cage": (gather @ smp.cage).tocsr(),
-        "Bu": sp.csr_matrix((smp.Bu.ravel(), (np.repeat(np.arange(SC), mmax), rowidx)),
-                            shape=(SC, V * mmax)),
+        "Bu": Bu,
         "gather": gather,
-        "agg": sp.csr_matrix((P, (smp.sample, np.arange(SC))), shape=(smp.n_samples, SC)),
+        "agg": sp.csc_matrix((P, smp.sample, one), shape=(L, SC)),
         "Wt": sp.diags(wt, format="csr"),
         "Wa": sp.diags(wa, format="csr"),
         "Dp": sp.diags(rule.mu * w * P, format="csr"),
