@@ -102,6 +102,19 @@ def test_the_wheel_check_sees_a_wrong_platform():
     assert bx.blender_platforms("scipy-1.17.1-cp311-cp311-macosx_12_0_arm64.whl") != ["macos-x64"]
 
 
+def test_numpy_is_not_shipped_only_while_blenders_own_satisfies_scipy(tmp_path):
+    """The build refuses a scipy that needs a newer numpy than Blender 4.2 bundles."""
+    for requirement, refused in (("numpy<2.7,>=1.26.4", False), ("numpy>=2.0", True)):
+        wheel = tmp_path / f"scipy-9-cp311-cp311-win_amd64-{refused}.whl"
+        with zipfile.ZipFile(wheel, "w") as zf:
+            zf.writestr("scipy-9.dist-info/METADATA", f"Name: scipy\nRequires-Dist: {requirement}\n")
+        if refused:
+            with pytest.raises(SystemExit, match="numpy"):
+                bx._check_numpy(wheel)
+        else:
+            bx._check_numpy(wheel)
+
+
 def test_addon_imports_the_core_only_through_its_shim():
     """A direct ``import gerbs_core`` would work in a checkout and fail in the zip."""
     direct = [f"{p.name}:{i + 1}" for p in sorted((ROOT / "blender_addon").glob("*.py"))
