@@ -211,7 +211,7 @@ def _alive(key) -> bool:
 
 
 def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
-    from gerbs_core.errors import GERBSValueError
+    from .errors import GERBSValueError
 
     key = state_key(obj, mod)
     st = _states.get(key)
@@ -258,8 +258,12 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
 
 def _build(settings, inp, progress, crz=creases_mod.NONE):
     """(points (P, 3), triangles (T, 3), stencil or None, lattice or None, surface)."""
-    from gerbs_core.mesh.surface import BlendingSurface
+    from .core import module, scipy_problem
+    from .errors import MissingDependencyError
 
+    if problem := scipy_problem():  # a message in the panel and status bar, not a traceback
+        raise MissingDependencyError(problem)
+    BlendingSurface = module("mesh.surface").BlendingSurface
     args = settings_mod.core_arguments(settings)
     X = inp.positions.astype(np.float64)
     normals = None if inp.normals is None else inp.normals.astype(np.float64)
@@ -276,7 +280,7 @@ def _build(settings, inp, progress, crz=creases_mod.NONE):
 
 
 def _rebuild(obj, mod, res, settings, skey, inp, progress, t0, crz=creases_mod.NONE):
-    from gerbs_core.errors import GERBSError
+    from .errors import GERBSError
 
     key = state_key(obj, mod)
     X = inp.positions.astype(np.float64)

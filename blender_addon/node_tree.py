@@ -19,12 +19,12 @@ result: a file opened without the add-on, a frame change the add-on missed,
 rebuild the result within the same depsgraph update and the second evaluation
 shows it.
 
-Node types missing in older Blender (the Warning node before 4.3) are skipped:
-the switch logic does not depend on them.
+Node types missing in older Blender (the Warning node before 4.3, see
+:mod:`compat`) are skipped: the switch logic does not depend on them.
 """
 from __future__ import annotations
 
-from . import ids
+from . import compat, ids
 
 MENU_NODE = "gerbs_menu_"  # name prefix of the Menu Switch nodes defining the menus
 
@@ -103,9 +103,9 @@ class _Tree:
 
     def warning(self, show, message, kind):
         """A node warning shown while `show` is True; returns `show` passed through it."""
-        node = self.node("GeometryNodeWarning", warning_type=kind)
-        if node is None:
+        if not compat.has_node_type(compat.WARNING_NODE):  # Blender 4.2 (see compat)
             return show
+        node = self.node(compat.WARNING_NODE, warning_type=kind)
         self.link(show, node.inputs["Show"])
         if isinstance(message, str):
             node.inputs["Message"].default_value = message
