@@ -137,11 +137,13 @@ def remove(obj, mod=None) -> None:
 
 
 def status(obj, mod=None) -> dict:
-    """Counts, timings and the last error of a modifier (for panels and scripts)."""
+    """Counts, timings, the last error and the warning line of a modifier (for panels and
+    scripts); ``warnings``: the repairs of the mesh (gerbs_core MeshWarning records)."""
     mod = _modifier(obj, mod)
     st = engine.get_state(obj, mod)
-    out = {"error": gn.get_error(mod)}
+    out = {"error": gn.get_error(mod), "warning": gn.get_warning(mod)}
     if st is not None and not st.error:
         out.update(points=st.n_points, faces=st.n_faces, triangles=st.n_triangles,
+                   warnings=st.warnings,
                    build_seconds=st.build_seconds, update_seconds=st.update_seconds)
     return out

@@ -33,18 +33,20 @@ class _LazyValues:
             from gerbs_core.mesh.assembly import assemble
             from gerbs_core.mesh.stencil import Stencil
 
-            model = self.surface.model
-            base, mono, _ = assemble(model, self.lattice)
-            self._stencil = Stencil(base, mono, model.operator, self.lattice)
+            repair = self.surface.repair
+            base, mono, _ = assemble(self.surface.model, self.lattice)
+            self._stencil = Stencil(repair.to_input(base), mono,
+                                    repair.fits_of_input(self.surface.model.fits), self.lattice)
         return self._stencil.apply(values)
 
 
 @dataclass
 class Built:
     points: np.ndarray  # (P, 3) float64
-    lattice: object  # gerbs_core.mesh.lattice.Lattice
+    lattice: object  # gerbs_core.mesh.lattice.Lattice (of the repaired mesh)
     stencil: object  # Stencil or None (Hermite normals)
-    values: object  # .apply(values (V, k)) -> (P, k)
+    values: object  # .apply(values (V, k) of the input's vertices) -> (P, k)
+    surface: object  # the BlendingSurface (its repair maps output elements to the input's)
 
 
 def build_surface(settings: dict, inp, resolution: int, progress) -> Built:
@@ -60,10 +62,10 @@ def build_surface(settings: dict, inp, resolution: int, progress) -> Built:
         progress(0.35, "evaluating surface")
         P = surface.tessellate(resolution)[0]
         lattice = surface.lattice(resolution)
-        return Built(P, lattice, None, _LazyValues(surface, lattice))
+        return Built(P, lattice, None, _LazyValues(surface, lattice), surface)
     progress(0.35, "building stencil")
     stencil = surface.stencil(resolution)
-    return Built(stencil.apply(X), stencil.lattice, stencil, stencil)
+    return Built(stencil.apply(X), stencil.lattice, stencil, stencil, surface)
 
 
 def write_geometry(mesh, built: Built, previous: Transfer | None, inp) -> Transfer:
@@ -78,8 +80,7 @@ def write_geometry(mesh, built: Built, previous: Transfer | None, inp) -> Transf
         edges = built.lattice.edges(quads=True)  # None: Blender computes them, no edge map
         mesh_io.write_surface(mesh, built.points, offsets, corners, edges=edges)
         out_edges = len(edges[0]) if edges is not None else None
-    return Transfer(built.lattice, True, built.values, inp.loops(), inp.carried.edge_verts,
-                    out_edges)
+    return Transfer(built.lattice, True, built.values, inp, out_edges, built.surface.repair)
 
 
 def write_carried(res, mod, transfer: Transfer, inp, record) -> None:

@@ -52,7 +52,7 @@ from . import geometry_nodes as gn
 from . import mesh_io, results, snapshot, stack
 from . import settings as settings_mod
 from .build import build_surface, write_carried, write_geometry
-from .errors import PREFIX, format_error
+from .errors import PREFIX, format_error, format_warnings
 from .progress import silent
 from .stencil_update import apply_stencil
 
@@ -80,6 +80,7 @@ class SurfaceState:
     problem: object = None  # the InvalidMeshError behind `error` (select operator)
     build_seconds: float = 0.0
     update_seconds: float = 0.0
+    warnings: tuple = ()  # gerbs_core.mesh.repair.MeshWarning of the last build
 
 
 @dataclass(frozen=True)
@@ -127,8 +128,9 @@ def prune(alive_keys) -> None:
         del _states[key]
 
 
-def set_error(obj, mod, message: str) -> None:
-    if gn.set_error(mod, message):
+def set_error(obj, mod, message: str, warning: str = "") -> None:
+    """The modifier's error line and its warning line (what a build repaired)."""
+    if gn.set_error(mod, message) | gn.set_warning(mod, "" if message else warning):
         obj.update_tag()  # re-evaluate: the Switch node shows the base mesh or the surface
 
 
@@ -324,7 +326,14 @@ def _rebuild(obj, mod, res, settings, skey, inp, resolution, progress, t0, rende
     prev = _states.get(key)
     previous = prev.transfer if prev is not None and prev.result_uid == st.result_uid else None
     st.transfer = write_geometry(res.data, built, previous, inp)
-    st.stencil, st.points = built.stencil, P
+    misfit = snapshot.misfit(res.data, inp)
+    if misfit:  # the record of the input must fit on the output
+        return _fail(obj, mod, key, st, (
+            f"{PREFIX}resolution {resolution} gives fewer output {misfit} than the mesh has "
+            f"(loose or merged ones); raise the resolution"), progress, render=render)
+    st.stencil, st.points, st.warnings = built.stencil, P, built.surface.warnings
+    for warning in st.warnings:
+        log.warning("GERBS: %s: %s", obj.name, warning.message)
     st.record = gn.settings_record(settings, resolution)
     write_carried(res, mod, st.transfer, inp, st.record)
     st.n_points, st.n_faces = len(P), st.transfer.n_faces
@@ -332,7 +341,7 @@ def _rebuild(obj, mod, res, settings, skey, inp, resolution, progress, t0, rende
     st.build_seconds = time.perf_counter() - t0
     _states[key] = st
     if not render:
-        set_error(obj, mod, "")
+        set_error(obj, mod, "", format_warnings(st.warnings))
     obj.update_tag()
     progress(1.0, "done")
     return SyncResult("rebuilt")

@@ -37,6 +37,18 @@ def format_error(exc: Exception) -> str:
            f"base mesh left as is"
 
 
+def format_warnings(warnings) -> str:
+    """One line summing up the repairs of a build (gerbs_core.mesh.repair.MeshWarning
+    records): tag, count and first indices of each; "" when there are none."""
+    if not warnings:
+        return ""
+    plural = {"vertex": "vertices", "face": "faces"}
+    parts = [f"{w.tag} ({len(w.indices)} "
+             f"{plural.get(w.element, w.element) if len(w.indices) > 1 else w.element} "
+             f"{list(w.indices[:5])}{' ...' if len(w.indices) > 5 else ''})" for w in warnings]
+    return f"{PREFIX}mesh repaired: " + "; ".join(parts)
+
+
 def operator_message(exc: Exception) -> str:
     """The text of an error raised by ``bpy.ops`` (``"Error: ...\\n"``) without the
     prefix Blender adds, so reporting it again does not read "Error: Error: ..."."""

@@ -167,9 +167,18 @@ def get_error(mod) -> str:
     return str(mod.get(_internal(mod, "error"), ""))
 
 
-def set_error(mod, message: str) -> bool:
+def get_warning(mod) -> str:
+    return str(mod.get(_internal(mod, "warning"), ""))
+
+
+def set_warning(mod, message: str) -> bool:
+    """Show `message` as the modifier's warning line ("" clears it). True if it changed."""
+    return set_error(mod, message, "warning")
+
+
+def set_error(mod, message: str, socket: str = "error") -> bool:
     """Show `message` as the modifier's error ("" clears it). True if it changed."""
-    key = _internal(mod, "error")
+    key = _internal(mod, socket)
     if str(mod.get(key, "")) == message:
         return False
     mod[key] = message

@@ -31,9 +31,10 @@ SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
 NODE_GROUP_NAME = "GERBS Blending Surface"
 MODIFIER_NAME = "GERBS Blending Surface"
 GROUP_TAG = "gerbs_group_version"  # custom property on the node group
-GROUP_VERSION = 4  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
-# Shape; 4: Render Resolution and a render result, the built settings and carried attributes
-# recorded on each result (no "Built ..." inputs), the input passed on while stale
+GROUP_VERSION = 5  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
+# Shape; 4: Merge by Distance, Merge Distance and the Warning line; 5: Render Resolution
+# and a render result, the built settings and carried attributes recorded on each result
+# (no "Built ..." inputs), the input passed on while stale
 RESULT_TAG = "gerbs_result"  # custom property on each hidden result object and its mesh
 RESULT_NAME = "GERBS Result"  # prefix of the result object / mesh names
 RENDER_RESULT_NAME = "GERBS Render Result"
@@ -47,20 +48,22 @@ EDIT_COPY_NAME = ".GERBS edit copy"  # temporary copy of a mesh in Edit Mode (me
 SNAPSHOT_PREFIX = ".gerbs_src_"  # (no other attribute starts with it)
 SNAP_POSITION = ".gerbs_src_position"  # POINT, FLOAT_VECTOR: base vertex positions
 SNAP_NORMAL = ".gerbs_src_normal"  # POINT, FLOAT_VECTOR: vertex normals (Use Custom Normals)
-SNAP_COUNT = ".gerbs_src_count"  # POINT, INT: (V, F, C, E, A) on points 0..4 (A: layers)
+SNAP_COUNT = ".gerbs_src_count_"  # + k: POINT, INT, its first point: (V, F, C, E, A)[k] (A: layers)
 SNAP_CORNER = ".gerbs_src_corner"  # CORNER, INT: vertex of each base face corner
 SNAP_FACE_SIZE = ".gerbs_src_face_size"  # FACE, INT: corners of each base face
 SNAP_MATERIAL = ".gerbs_src_material"  # FACE, INT: material index of each base face
 SNAP_EDGE_A = ".gerbs_src_edge_a"  # EDGE, INT: first vertex of each base edge
 SNAP_EDGE_B = ".gerbs_src_edge_b"  # EDGE, INT: second vertex of each base edge
-SNAP_SETTINGS = ".gerbs_src_settings"  # POINT, FLOAT: ids.RECORD_SETTINGS as built (menus:
-#                                        item position), resolution = the one built
+SNAP_SETTINGS = ".gerbs_src_setting_"  # + k: POINT, FLOAT, its first point: ids.RECORD_SETTINGS[k]
+#                                        as built (menus: item position; resolution: the one built)
 SNAP_LAYERS = ".gerbs_src_layers"  # POINT, INT: 4 per carried layer i: start and length of its
 #                                   name in the modifier's "Attribute Names", its check
 #                                   branch (LAYER_KINDS x DOMAINS) and 1 for a vertex group
 SNAP_LAYER = ".gerbs_src_layer_"  # + i: the base values of carried layer i (its domain, type)
-SNAPSHOT_ATTRIBUTES = (SNAP_POSITION, SNAP_NORMAL, SNAP_COUNT, SNAP_CORNER, SNAP_FACE_SIZE,
-                       SNAP_MATERIAL, SNAP_EDGE_A, SNAP_EDGE_B, SNAP_SETTINGS, SNAP_LAYERS)
+N_COUNTS = 5  # SNAP_COUNT + 0..4 (one attribute each: any mesh has a first point)
+SNAPSHOT_ATTRIBUTES = (SNAP_POSITION, SNAP_NORMAL, SNAP_CORNER, SNAP_FACE_SIZE, SNAP_MATERIAL,
+                       SNAP_EDGE_A, SNAP_EDGE_B, SNAP_LAYERS) + tuple(
+    f"{SNAP_COUNT}{k}" for k in range(N_COUNTS))  # + SNAP_SETTINGS + k (record_names())
 OUT_WEIGHT = ".gerbs_src_weight_"  # + i: POINT FLOAT, output weights of vertex-group layer i
 #                                   (the node group stores them into the result's group)
 # What the modifier received, on the geometry it passes on while it shows no surface
@@ -164,6 +167,13 @@ SETTINGS = (
                description="Make the surface leave every vertex perpendicular to the "
                            "mesh's vertex normal (edit normals to steer the surface); "
                            "every edit then rebuilds the surface"),
+    SocketSpec("merge", "Merge by Distance", "NodeSocketBool", False,
+               description="Weld vertices closer than Merge Distance before building, so an "
+                           "unwelded seam (split UVs or normals of an import) is smooth "
+                           "across; off: the surface has a crack along such seams"),
+    SocketSpec("merge_distance", "Merge Distance", "NodeSocketFloat", 1.0e-4, 0.0, 1.0e6,
+               "Merge by Distance: vertices closer than this become one, and the surface "
+               "passes through it once (0: only coincident ones)"),
     SocketSpec("memory_budget", "Memory Budget (MB)", "NodeSocketFloat", 2000.0, 1.0, 1.0e6,
                "Largest memory (MB) a build may use; larger builds are refused with an error",
                scale=1.0e6, shape=False),
@@ -175,6 +185,8 @@ INTERNAL = (
                description="Hidden object holding the surface at the render resolution"),
     SocketSpec("error", "Error", "NodeSocketString", "", hidden=True,
                description="Last error of the add-on; shown as a node warning"),
+    SocketSpec("warning", "Warning", "NodeSocketString", "", hidden=True,
+               description="What the last build repaired in the mesh; shown as a node warning"),
     SocketSpec("names", "Attribute Names", "NodeSocketString", "", hidden=True,
                description="Names of the carried attributes, end to end (internal)"),
 )
@@ -187,4 +199,9 @@ SHAPE_SETTINGS = tuple(s for s in SETTINGS if s.shape)
 # for the resolution the result is for (viewport or render).
 RECORD_SETTINGS = tuple(s for s in SHAPE_SETTINGS if s.key != "render_resolution")
 SETTING_KEYS = tuple(s.key for s in SETTINGS)
+
+
+def record_names() -> tuple:
+    """Every fixed attribute of a result's record (the settings' included)."""
+    return SNAPSHOT_ATTRIBUTES + tuple(f"{SNAP_SETTINGS}{k}" for k in range(len(RECORD_SETTINGS)))
 DEFAULTS = {s.key: s.default * s.scale if s.scale != 1.0 else s.default for s in SETTINGS}

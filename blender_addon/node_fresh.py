@@ -32,7 +32,7 @@ def settings_fresh(t, result, current: dict, resolution):
     for k, spec in enumerate(ids.RECORD_SETTINGS):
         value = resolution if spec.key == "resolution" else current[spec.key]
         checks.append(t.compare("FLOAT", "EQUAL", value,
-                                t.sample(result, ids.SNAP_SETTINGS, "FLOAT", "POINT", k)))
+                                t.sample(result, f"{ids.SNAP_SETTINGS}{k}", "FLOAT", "POINT", 0)))
     return t.boolean("AND", *checks)
 
 
@@ -49,7 +49,7 @@ def geometry_fresh(t, base, result):
     t.link(base, size.inputs["Geometry"])
     counts = ("Point Count", "Face Count", "Face Corner Count", "Edge Count")
     checks = [t.compare("INT", "EQUAL", size.outputs[name],
-                        t.sample(result, ids.SNAP_COUNT, "INT", "POINT", k))
+                        t.sample(result, f"{ids.SNAP_COUNT}{k}", "INT", "POINT", 0))
               for k, name in enumerate(counts)]
     index = t.index()
     position = t.node("GeometryNodeInputPosition").outputs[0]
@@ -85,7 +85,7 @@ def _layer(t, result, names, i):
 
 
 def _count(t, result, k):
-    return t.sample(result, ids.SNAP_COUNT, "INT", "POINT", k)
+    return t.sample(result, f"{ids.SNAP_COUNT}{k}", "INT", "POINT", 0)
 
 
 def _layer_equal(t, base, result, name, record, kind, domain):
@@ -166,7 +166,7 @@ def strip_record(t, geometry):
         t.link(geometry, remove.inputs["Geometry"])
         return remove.outputs[0]
     t.nodes.remove(remove)
-    for name in ids.SNAPSHOT_ATTRIBUTES:
+    for name in ids.record_names():
         remove = t.node("GeometryNodeRemoveAttribute")
         remove.inputs["Name"].default_value = name
         t.link(geometry, remove.inputs["Geometry"])

@@ -106,8 +106,11 @@ def build(group) -> None:
     view_fresh = _fresh(t, gin, base, results["result"], current, current["resolution"])
     stale = t.warning(t.boolean("AND", no_error, t.boolean("NOT", view_fresh)),
                       ids.STALE_MESSAGE, "WARNING")
+    repaired = t.warning(t.boolean("AND", no_error, view_fresh, t.compare(
+        "STRING", "NOT_EQUAL", gin.outputs["Warning"], "")), gin.outputs["Warning"], "WARNING")
+    used = t.boolean("OR", repaired, t.boolean("NOT", repaired))  # (evaluates the warning)
     passed = node_fresh.channel(t, base, results["result"], gin.outputs["Attribute Names"])
-    view = t.switch("GEOMETRY", t.boolean("AND", no_error, t.boolean("NOT", stale)),
+    view = t.switch("GEOMETRY", t.boolean("AND", no_error, t.boolean("NOT", stale), used),
                     passed, _shown(t, gin, results["result"]))
     render_fresh = _fresh(t, gin, base, results["render_result"], current,
                           current["render_resolution"])

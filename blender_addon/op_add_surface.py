@@ -37,6 +37,8 @@ class OBJECT_OT_gerbs_add_surface(bpy.types.Operator):
             # modifier kept (fix the mesh and it updates live); base mesh untouched
             self.report({"ERROR"}, status["error"])
             return {"FINISHED"}
+        if status["warning"]:
+            self.report({"WARNING"}, status["warning"])
         self.report({"INFO"}, f"GERBS surface: {status.get('points', 0)} points, "
                               f"{status.get('build_seconds', 0.0):.2f} s")
         return {"FINISHED"}

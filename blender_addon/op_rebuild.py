@@ -27,4 +27,7 @@ class OBJECT_OT_gerbs_rebuild(bpy.types.Operator):
         if errors:
             self.report({"ERROR"}, "; ".join(errors))
             return {"CANCELLED"}
+        warning = api.status(obj)["warning"]
+        if warning:
+            self.report({"WARNING"}, warning)
         return {"FINISHED"}

@@ -1,4 +1,5 @@
-"""OBJECT_OT_gerbs_select_problem: select the elements the panel's error names, in Edit Mode."""
+"""OBJECT_OT_gerbs_select_problem: select the elements the panel's error (else its warning
+line) names, in Edit Mode."""
 from __future__ import annotations
 
 import bmesh
@@ -7,17 +8,22 @@ import bpy
 from . import api, engine, ids, problems
 
 
-def _problem(obj):
+def _problems(obj) -> tuple:
+    """What the panel names on the base mesh: the error's problem, else the repairs of the
+    last build (gerbs_core MeshWarning records); () when there is nothing to select."""
     mod = api.get_modifier(obj) if obj is not None and obj.type == "MESH" else None
     st = engine.get_state(obj, mod) if mod is not None else None
-    if st is None or not st.error or st.problem is None or not problems.on_base_mesh(obj, mod):
-        return None
-    return st.problem
+    if st is None or not problems.on_base_mesh(obj, mod):
+        return ()
+    if st.error:
+        return (st.problem,) if st.problem is not None else ()
+    return tuple(st.warnings)
 
 
-def select(obj, problem) -> dict:
-    """Enter Edit Mode on `obj` and select exactly the elements of `problem`; returns
-    the counts selected per kind. Indices outside the mesh are skipped."""
+def select(obj, items) -> dict:
+    """Enter Edit Mode on `obj` and select exactly the elements of `items` (problems or
+    warnings); returns the counts selected per kind. Indices outside the mesh are
+    skipped."""
     if obj.mode != "EDIT":
         with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj]):
             bpy.ops.object.mode_set(mode="EDIT")
@@ -26,7 +32,10 @@ def select(obj, problem) -> dict:
         seq.ensure_lookup_table()
         for elem in seq:
             elem.select_set(False)
-    want = problems.selection(problem)
+    want = {"vertex": [], "edge": [], "face": []}
+    for item in items:
+        for kind, elements in problems.selection(item).items():
+            want[kind] += elements
     got = {"vertex": 0, "edge": 0, "face": 0}
     for i in want["vertex"]:
         if 0 <= i < len(bm.verts):
@@ -53,7 +62,8 @@ def select(obj, problem) -> dict:
 
 
 class OBJECT_OT_gerbs_select_problem(bpy.types.Operator):
-    """Select, in Edit Mode, the vertices, edges or faces the GERBS error names"""
+    """Select, in Edit Mode, the vertices, edges or faces the GERBS error names (else
+    those the mesh repair changed)"""
 
     bl_idname = ids.OP_SELECT_PROBLEM
     bl_label = "Select the Problem"
@@ -61,11 +71,11 @@ class OBJECT_OT_gerbs_select_problem(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return _problem(getattr(context, "active_object", None)) is not None
+        return bool(_problems(getattr(context, "active_object", None)))
 
     def execute(self, context):
         obj = context.active_object
-        got = select(obj, _problem(obj))
+        got = select(obj, _problems(obj))
         plural = {"vertex": "vertices", "edge": "edges", "face": "faces"}
         words = [f"{n} {kind if n == 1 else plural[kind]}" for kind, n in got.items() if n]
         self.report({"INFO"}, f"Selected {', '.join(words) or 'nothing'}")

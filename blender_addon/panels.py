@@ -39,24 +39,29 @@ def setting_rows(mod) -> list:
     rows = [("Resolution", "resolution"), ("Resolution", "render_resolution"),
             ("Shape", "kernel")] + [("Shape", k) for k in params]
     rows += [("Shape", k) for k in ("boundary", "rest", "use_normals")]
+    rows += [("Repair", "merge"), ("Repair", "merge_distance")]
     rows += [("Build", "memory_budget")]
     return [(section, key, _LABELS.get(key, _SPECS[key].name)) for section, key in rows]
 
 
 def panel_rows(obj, mod, width_px: float = 300.0, scale: float = 1.0) -> dict:
-    """What the panel shows: {"error": [lines], "select": bool, "notes": [[lines]],
-    "settings": setting_rows, "status": [lines]}."""
+    """What the panel shows: {"error": [lines], "select": bool, "warning": [lines] (what
+    the mesh repair changed), "notes": [[lines]], "settings": setting_rows,
+    "status": [lines]}."""
     info = api.status(obj, mod)
     st = engine.get_state(obj, mod)
     problem = st.problem if st is not None and st.error else None
-    out = {"error": [], "select": False, "notes": [], "settings": setting_rows(mod),
-           "status": []}
+    out = {"error": [], "select": False, "warning": [], "notes": [],
+           "settings": setting_rows(mod), "status": []}
     if info["error"]:
         text = problems.headline(info["error"], problem)
         if problem is not None and not problems.on_base_mesh(obj, mod):
             text += " It is in the mesh the modifiers above GERBS make; fix it there."
         out["error"] = problems.wrap(text, width_px, scale)
         out["select"] = problem is not None and problems.on_base_mesh(obj, mod)
+    elif info["warning"]:  # what the mesh repair changed
+        out["warning"] = problems.wrap(problems.headline(info["warning"]), width_px, scale)
+        out["select"] = bool(st is not None and st.warnings) and problems.on_base_mesh(obj, mod)
     try:
         settings = gn.read_settings(mod)
     except ValueError:
@@ -108,6 +113,13 @@ class GERBS_PT_status(bpy.types.Panel):
             box.alert = True
             for k, line in enumerate(rows["error"]):
                 box.label(text=line, icon="ERROR" if k == 0 else "BLANK1")
+            if rows["select"]:
+                box.operator(ids.OP_SELECT_PROBLEM, text="Select in Edit Mode",
+                             icon="RESTRICT_SELECT_OFF")
+        if rows["warning"]:
+            box = layout.box()
+            for k, line in enumerate(rows["warning"]):
+                box.label(text=line, icon="INFO" if k == 0 else "BLANK1")
             if rows["select"]:
                 box.operator(ids.OP_SELECT_PROBLEM, text="Select in Edit Mode",
                              icon="RESTRICT_SELECT_OFF")

@@ -116,5 +116,6 @@ def core_arguments(settings: dict) -> CoreArguments:
         "logistic": lambda s: LogisticStep(),
         "affine": lambda s: Affine(),
     }
-    surface = {"boundary": settings["boundary"], "memory_budget": settings["memory_budget"]}
+    surface = {"boundary": settings["boundary"], "memory_budget": settings["memory_budget"],
+               "merge_distance": settings["merge_distance"] if settings["merge"] else None}
     return CoreArguments(kernels[settings["kernel"]](settings), surface, settings["resolution"])

@@ -4,7 +4,8 @@ A result shows only while the geometry the modifier receives equals the record,
 exactly (node_fresh.py): positions, corner vertices, face sizes, material
 indices, edge vertices, counts, every carried layer's values (``ids.SNAP_LAYER``
 + i, on the layer's own domain and type) and the settings the result was built
-with (``ids.SNAP_SETTINGS``, in ``ids.RECORD_SETTINGS`` order). The names of the
+with (``ids.SNAP_SETTINGS`` + k, in ``ids.RECORD_SETTINGS`` order; counts and settings one
+attribute each, on its first point). The names of the
 carried layers travel as one string on the modifier ("Attribute Names"); the
 result's ``ids.SNAP_LAYERS`` table says where each name starts, its length, how
 the node group checks it and whether it is a vertex group. Each record uses the
@@ -50,6 +51,18 @@ def _domain_sizes(mesh) -> dict:
             "CORNER": len(mesh.loops)}
 
 
+def misfit(mesh, inp: MeshInput) -> str:
+    """"" when the record of `inp` fits on result `mesh` (each record uses the first
+    V / E / F / C elements of its domain, the layer table the first 4 A points), else the elements the mesh has too few of ("points, faces")."""
+    carried = inp.carried or Carried()
+    need = {"points": max(len(inp.positions), 4 * len(carried.layers)),
+            "edges": len(carried.edge_verts), "faces": len(inp.offsets) - 1,
+            "face corners": len(inp.corners)}
+    have = dict(zip(need, (len(mesh.vertices), len(mesh.edges), len(mesh.polygons),
+                           len(mesh.loops))))
+    return ", ".join(k for k in need if have[k] < need[k])
+
+
 def write_positions(mesh, inp: MeshInput) -> None:
     """Only the positions (the fast path: nothing else changed)."""
     put(mesh, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", inp.positions, len(mesh.vertices))
@@ -63,13 +76,13 @@ def write_snapshot(mesh, inp: MeshInput, record) -> None:
     write_positions(mesh, inp)
     counts = (len(inp.positions), len(inp.offsets) - 1, len(inp.corners),
               len(carried.edge_verts), len(table))
-    put(mesh, ids.SNAP_COUNT, "INT", "POINT", counts, n["POINT"])
+    _put_scalars(mesh, ids.SNAP_COUNT, "INT", counts, n["POINT"])
     put(mesh, ids.SNAP_CORNER, "INT", "CORNER", inp.corners, n["CORNER"])
     put(mesh, ids.SNAP_FACE_SIZE, "INT", "FACE", np.diff(inp.offsets), n["FACE"])
     put(mesh, ids.SNAP_MATERIAL, "INT", "FACE", inp.materials, n["FACE"])
     put(mesh, ids.SNAP_EDGE_A, "INT", "EDGE", carried.edge_verts[:, 0], n["EDGE"])
     put(mesh, ids.SNAP_EDGE_B, "INT", "EDGE", carried.edge_verts[:, 1], n["EDGE"])
-    put(mesh, ids.SNAP_SETTINGS, "FLOAT", "POINT", np.asarray(record, np.float32), n["POINT"])
+    _put_scalars(mesh, ids.SNAP_SETTINGS, "FLOAT", record, n["POINT"])
     put(mesh, ids.SNAP_LAYERS, "INT", "POINT", table, n["POINT"])
     for i, layer in enumerate(carried.layers):
         put(mesh, f"{ids.SNAP_LAYER}{i}", layer.data_type, layer.domain, layer.values,
@@ -84,13 +97,26 @@ def write_snapshot(mesh, inp: MeshInput, record) -> None:
         mesh.attributes.remove(mesh.attributes[ids.SNAP_NORMAL])
 
 
+def _put_scalars(mesh, prefix: str, data_type: str, values, size: int) -> None:
+    """Each of `values` on the first point of its own attribute `prefix` + k (a tiny
+    output has fewer points than there are values)."""
+    for k, value in enumerate(values):
+        put(mesh, f"{prefix}{k}", data_type, "POINT", [value], size)
+
+
+def _scalars(mesh, prefix: str, count: int, dtype) -> np.ndarray:
+    """The values :func:`_put_scalars` stored (the attributes must exist)."""
+    n = len(mesh.vertices)
+    return np.array([_get(mesh.attributes[f"{prefix}{k}"].data, "value", n, dtype)[0]
+                     for k in range(count)], dtype=dtype)
+
+
 def read_record(mesh) -> np.ndarray | None:
     """The settings record (len(ids.RECORD_SETTINGS),) float32, or None."""
-    attr = mesh.attributes.get(ids.SNAP_SETTINGS)
-    k = len(ids.RECORD_SETTINGS)
-    if attr is None or len(mesh.vertices) < k:
+    if any(mesh.attributes.get(name) is None for name in ids.record_names()) \
+            or not len(mesh.vertices):
         return None
-    return _get(attr.data, "value", len(mesh.vertices), np.float32)[:k].copy()
+    return _scalars(mesh, ids.SNAP_SETTINGS, len(ids.RECORD_SETTINGS), np.float32)
 
 
 def _read_layers(mesh, names: str, A: int, n: dict) -> tuple | None:
@@ -114,13 +140,12 @@ def read_snapshot(mesh, names: str) -> MeshInput | None:
     """The input stored by :func:`write_snapshot` (None if the mesh has none or it does
     not fit). `names`: the modifier's "Attribute Names"."""
     attrs = mesh.attributes
-    if any(attrs.get(name) is None for name in ids.SNAPSHOT_ATTRIBUTES if name != ids.SNAP_NORMAL):
+    if any(attrs.get(name) is None for name in ids.record_names() if name != ids.SNAP_NORMAL):
         return None
     n = _domain_sizes(mesh)
-    if n["POINT"] < 5:
+    if not n["POINT"]:
         return None
-    V, F, C, E, A = (int(c) for c in _get(attrs[ids.SNAP_COUNT].data, "value", n["POINT"],
-                                          np.int32)[:5])
+    V, F, C, E, A = (int(c) for c in _scalars(mesh, ids.SNAP_COUNT, ids.N_COUNTS, np.int32))
     if not (0 <= V <= n["POINT"] and 0 <= F <= n["FACE"] and 0 <= C <= n["CORNER"]
             and 0 <= E <= n["EDGE"] and 0 <= 4 * A <= n["POINT"]):
         return None

@@ -8,21 +8,23 @@ For Suzanne, an icosphere and a 32x32 grid, and Subsurf levels giving ~30k and
 count is closest to Subsurf's (both counts printed; must agree within 5%).
 Times (medians of repeats, seconds), each including the depsgraph evaluation
 and access to the evaluated mesh's positions:
-  build   add the modifier to a mesh without one, evaluate. GERBS "build G" is
-          cold: the process-wide star-envelope memo is cleared before every
-          timed build (outside the timer), as for the first surface of a session;
-          "warm G" keeps it (a rebuild after a settings change). One untimed
-          build of each modifier first (imports, kernel tables, Blender's lazy
-          set-up), then the timed repeats, interleaved (Subsurf, GERBS cold, GERBS
-          warm in every round) so both see the same machine load.
-  1 vert  move one base vertex, evaluate
-  all     move every base vertex, evaluate
-"pair" is the median over the rounds of (GERBS cold / Subsurf) within a round,
+  build   add the modifier to a mesh without one, evaluate (from scratch: the
+          core keeps no process-wide cache). One untimed build of each modifier
+          first (imports, kernel tables, Blender's lazy set-up), then the timed
+          repeats, interleaved (Subsurf, GERBS in every round) so both see the
+          same machine load.
+  1 vert  move one base vertex, evaluate (GERBS with Rest Shape "Follow", the
+          default: a rebuild; "1v bound": Rest Shape "Bound", the sparse update)
+  all     move every base vertex, evaluate (Rest Shape "Bound")
+--edit (with --large: the 35k-vertex triangle mesh) times Edit Mode updates at
+resolution 2: a selection-only change and a one-vertex move (bmesh, then a
+depsgraph update), with and without the GERBS modifier.
+"pair" is the median over the rounds of (GERBS / Subsurf) within a round,
 less sensitive to load changing during the run than the ratio of the medians.
 The add-on's node group is made once (printed: "group"; it is removed with the
 last GERBS modifier, so a fake user keeps it through the add/remove rounds).
 Targets (issue 5): GERBS update <= 0.5x Subsurf at ~120k vertices; build <= 4x
-(cold).
+(from scratch).
 """
 from __future__ import annotations
 
@@ -47,14 +49,35 @@ def median_time(fn, repeats):
     return statistics.median(times)
 
 
-def make_objects(bpy):
+def height_field(bpy, n: int, name: str):
+    """A triangulated n x n height-field grid z = 0.1 sin(3x) cos(2y) (n^2 vertices)."""
+    x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    V = np.stack([x.ravel(), y.ravel(), (0.1 * np.sin(3 * x) * np.cos(2 * y)).ravel()], 1)
+    idx = np.arange(n * n).reshape(n, n)
+    a, b, c, d = (idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(),
+                  idx[1:, :-1].ravel())
+    F = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(V.tolist(), [], F.tolist())
+    mesh.update()
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
+def make_objects(bpy, large: bool):
     bpy.ops.wm.obj_import(filepath=str(ROOT / "examples" / "suzanne.obj"))
     suzanne = bpy.context.selected_objects[0]
     bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=3, radius=1.0)
     ico = bpy.context.active_object
     bpy.ops.mesh.primitive_grid_add(x_subdivisions=32, y_subdivisions=32, size=2.0)
     grid = bpy.context.active_object
-    return {"suzanne": suzanne, "icosphere": ico, "grid 32x32": grid}
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=64, y_subdivisions=64, size=2.0)
+    grid64 = bpy.context.active_object
+    objects = {"suzanne": suzanne, "icosphere": ico, "grid 32x32": grid, "grid 64x64": grid64}
+    if large:
+        objects["tri 35k"] = height_field(bpy, 188, "tri35k")
+    return objects
 
 
 def evaluated_positions(bpy, obj):
@@ -62,7 +85,7 @@ def evaluated_positions(bpy, obj):
     dg.update()
     mesh = obj.evaluated_get(dg).data
     buf = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
-    mesh.attributes["position"].data.foreach_get("vector", buf)
+    mesh.vertices.foreach_get("co", buf)  # the evaluated copy (Edit Mode: the cage)
     return buf
 
 
@@ -126,46 +149,45 @@ def bench_pair(bpy, obj, level, repeats):
         obj.modifiers.clear()
         evaluated_positions(bpy, obj)
 
-    def gerbs_build():
-        api.add_surface(obj, resolution=r)
+    def gerbs_build(rest="follow"):
+        api.add_surface(obj, resolution=r, rest=rest)
         evaluated_positions(bpy, obj)
 
     def gerbs_clear():
         api.remove(obj)
         evaluated_positions(bpy, obj)
 
-    from gerbs_core.mesh.cover import clear_envelope_cache
-
-    def timed(build, clear, cold=False):
+    def timed(build, clear):
         clear()
-        if cold:
-            clear_envelope_cache()
         t0 = time.perf_counter()
         build()
         t = time.perf_counter() - t0
         clear()
         return t
 
-    # builds interleaved (S, G cold, G warm per round) so that both modifiers see the
+    # builds interleaved (S, G per round) so that both modifiers see the
     # same machine load; one untimed build of each first
     timed(sub_build, sub_clear)
     timed(gerbs_build, gerbs_clear)
-    builds = {"subsurf": [], "gerbs": [], "gerbs warm": []}
+    builds = {"subsurf": [], "gerbs": []}
     for _ in range(max(3, repeats)):
         builds["subsurf"].append(timed(sub_build, sub_clear))
-        builds["gerbs"].append(timed(gerbs_build, gerbs_clear, cold=True))
-        gerbs_build()  # fills the memo, untimed
-        builds["gerbs warm"].append(timed(gerbs_build, gerbs_clear))
-    for name, build, clear in (("subsurf", sub_build, sub_clear), ("gerbs", gerbs_build, gerbs_clear)):
-        build()
-        evaluated_positions(bpy, obj)
+        builds["gerbs"].append(timed(gerbs_build, gerbs_clear))
+    def moves():
         one = median_time(lambda: (mover.one(), evaluated_positions(bpy, obj)), repeats)
         allv = median_time(lambda: (mover.all(), evaluated_positions(bpy, obj)), repeats)
-        rows[name] = (statistics.median(builds[name]),
-                      statistics.median(builds["gerbs warm" if name == "gerbs" else name]),
-                      one, allv)
-        clear()
-    # median over rounds of the cold-build ratio within each round (robust to load drift)
+        return one, allv
+
+    sub_build()
+    rows["subsurf"] = (statistics.median(builds["subsurf"]),) + moves()
+    sub_clear()
+    gerbs_build()
+    one_follow = moves()[0]
+    gerbs_clear()
+    gerbs_build(rest="bound")
+    rows["gerbs"] = (statistics.median(builds["gerbs"]), one_follow) + moves()
+    gerbs_clear()
+    # median over rounds of the build ratio within each round (robust to load drift)
     rows["paired"] = statistics.median(g / s for g, s in zip(builds["gerbs"], builds["subsurf"]))
     return n_sub, n_gerbs, r, rows
 
@@ -174,6 +196,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--quick", action="store_true", help="only the ~30k level")
+    ap.add_argument("--large", action="store_true", help="also the 35k-vertex triangle mesh")
+    ap.add_argument("--edit", action="store_true", help="Edit Mode timings (35k mesh with --large)")
     args = ap.parse_args(argv)
     import bpy
 
@@ -186,22 +210,70 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     gn.ensure_group().use_fake_user = True  # kept through the add/remove rounds
     print(f"group: {time.perf_counter() - t0:.3f} s to make the node group (once per file)")
-    objects = make_objects(bpy)
-    levels = {"suzanne": (3, 4), "icosphere": (3, 4), "grid 32x32": (3, 4)}
+    objects = make_objects(bpy, args.large)
+    levels = {"suzanne": (3, 4), "icosphere": (3, 4), "grid 32x32": (3, 4), "grid 64x64": (2, 3),
+              "tri 35k": (3,)}
     print(f"{'mesh':<11} {'lvl':>3} {'subsurf pts':>11} {'r':>3} {'gerbs pts':>10} {'diff':>6} | "
-          f"{'build S':>8} {'build G':>8} {'G/S':>5} {'pair':>5} {'warm G':>8} {'G/S':>5} | "
-          f"{'1vert S':>8} {'1vert G':>8} {'G/S':>5} | {'all S':>8} {'all G':>8} {'G/S':>5}")
+          f"{'build S':>8} {'build G':>8} {'G/S':>5} {'pair':>5} | "
+          f"{'1vert S':>8} {'1vert G':>8} {'G/S':>5} {'1v bound':>8} {'G/S':>5} | "
+          f"{'all S':>8} {'all G':>8} {'G/S':>5}")
     for name, obj in objects.items():
         for level in levels[name][: 1 if args.quick else 2]:
             n_sub, n_g, r, rows = bench_pair(bpy, obj, level, args.repeats)
-            (bs, _, os_, as_), (bg, wg, og, ag) = rows["subsurf"], rows["gerbs"]
+            (bs, os_, as_), (bg, og, obg, ag) = rows["subsurf"], rows["gerbs"]
             print(f"{name:<11} {level:>3} {n_sub:>11} {r:>3} {n_g:>10} {100 * (n_g - n_sub) / n_sub:>5.1f}% | "
                   f"{bs:>8.4f} {bg:>8.4f} {bg / bs:>5.2f} {rows['paired']:>5.2f} "
-                  f"{wg:>8.4f} {wg / bs:>5.2f} | "
-                  f"{os_:>8.4f} {og:>8.4f} {og / os_:>5.2f} | "
+                  "| "
+                  f"{os_:>8.4f} {og:>8.4f} {og / os_:>5.2f} {obg:>8.4f} {obg / os_:>5.2f} | "
                   f"{as_:>8.4f} {ag:>8.4f} {ag / as_:>5.2f}", flush=True)
+    if args.edit:
+        edit_mode(bpy, objects["tri 35k" if args.large else "suzanne"], args.repeats)
     blender_addon.unregister()
     return 0
+
+
+def edit_mode(bpy, obj, repeats):
+    """Edit Mode update costs with and without the modifier (module docstring)."""
+    import bmesh
+
+    from blender_addon import api
+
+    def times():
+        bpy.ops.object.mode_set(mode="EDIT")
+        bm = bmesh.from_edit_mesh(obj.data)
+        bm.verts.ensure_lookup_table()
+        v = bm.verts[len(bm.verts) // 2]
+        k = [0]
+
+        def select():
+            k[0] += 1
+            v.select_set(k[0] % 2 == 0)
+            bmesh.update_edit_mesh(obj.data, loop_triangles=False, destructive=False)
+            evaluated_positions(bpy, obj)
+
+        def move():
+            k[0] += 1
+            v.co.z += 1e-3 * (-1) ** k[0]
+            bmesh.update_edit_mesh(obj.data, loop_triangles=False, destructive=False)
+            evaluated_positions(bpy, obj)
+        select(), move()  # first updates untimed
+        out = median_time(select, max(repeats, 7)), median_time(move, max(repeats, 7))
+        bpy.ops.object.mode_set(mode="OBJECT")
+        return out
+
+    for o in bpy.context.view_layer.objects:
+        o.select_set(o == obj)
+    bpy.context.view_layer.objects.active = obj
+    obj.modifiers.clear()
+    bare = times()
+    for rest in ("follow", "bound"):
+        api.add_surface(obj, resolution=2, rest=rest)
+        with_mod = times()
+        api.remove(obj)
+        print(f"Edit Mode, {obj.name} ({len(obj.data.vertices)} vertices), GERBS r=2 rest={rest}: "
+              f"selection {with_mod[0] * 1e3:.1f} ms (without the modifier {bare[0] * 1e3:.1f} ms, "
+              f"{with_mod[0] / bare[0]:.2f}x); one-vertex move {with_mod[1] * 1e3:.1f} ms "
+              f"(without {bare[1] * 1e3:.1f} ms)", flush=True)
 
 
 if __name__ == "__main__":

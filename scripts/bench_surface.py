@@ -6,14 +6,13 @@ update time (W @ X), memory (tracemalloc peak of the build), nnz per row; and,
 when ``import bpy`` works, Blender's Subdivision Surface modifier at the matching
 level (level L <-> resolution 2**L) in the same run: build = add the modifier and
 evaluate the depsgraph from scratch; update = move one vertex and evaluate again.
-Medians of repeats; ratios GERBS / Subsurf. The cold GERBS builds and the Subsurf
+Medians of repeats; ratios GERBS / Subsurf. The GERBS builds and the Subsurf
 builds alternate (one of each per round), so both see the same machine load.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/bench_surface.py [--repeats 5] [--tables]
 
-Cold builds clear the process-wide star-envelope memo first; warm builds reuse it
-(as a rebuild in a running Blender session does). --tables also prints the Franke F1
-convergence table (N = 100 ... 6400).
+Every build is from scratch (the core keeps no process-wide cache). --tables also
+prints the Franke F1 convergence table (N = 100 ... 6400).
 """
 from __future__ import annotations
 
@@ -33,7 +32,6 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from gerbs_core.datasets import primitives as P  # noqa: E402
-from gerbs_core.mesh.cover import clear_envelope_cache  # noqa: E402
 from gerbs_core.mesh.surface import BlendingSurface  # noqa: E402
 
 
@@ -49,26 +47,21 @@ def median_time(fn, repeats):
 
 def gerbs_case(V, F, r, repeats, subsurf_build=None):
     """GERBS timings; with ``subsurf_build`` (a function timing one Subsurf build) the
-    cold builds alternate with Subsurf builds, so both see the same machine load
+    builds alternate with Subsurf builds, so both see the same machine load
     (returned as ``ss_build``, the median)."""
     def build():
         s = BlendingSurface(V, F)
         return s, s.stencil(r)
 
-    def cold():
-        clear_envelope_cache()
-        return build()
-
     build()  # warm-up (imports, kernel tables)
     tcold, tss = [], []
     for _ in range(repeats):
         t = time.perf_counter()
-        s, st = cold()
+        s, st = build()
         tcold.append(time.perf_counter() - t)
         if subsurf_build is not None:
             tss.append(subsurf_build())
     tb = statistics.median(tcold)
-    tw, _ = median_time(build, repeats)
     X = V.copy()
     X[0] += 1e-3
 
@@ -77,10 +70,10 @@ def gerbs_case(V, F, r, repeats, subsurf_build=None):
 
     tu, _ = median_time(update, max(repeats, 20))
     tracemalloc.start()
-    cold()
+    build()
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    return dict(points=st.shape[0], build=tb, warm=tw, update=tu, mem=peak / 1e6,
+    return dict(points=st.shape[0], build=tb, update=tu, mem=peak / 1e6,
                 nnz=st.nnz_per_row, eps0=s.last_eps0,
                 ss_build=statistics.median(tss) if tss else None)
 
@@ -158,24 +151,24 @@ def main():
     except ImportError:
         bpy = None
     meshes = {"suzanne": P.suzanne(), "icosphere(3)": P.icosphere(3), "grid 32x32": P.grid(32, 32)}
-    print("build: BlendingSurface + stencil from scratch (cold: envelope memo cleared; warm: "
-          "star envelopes memoized); update: W @ X; Subsurf (ss) at level L = log2 r")
-    print(f"{'mesh':13} {'L/r':>4} {'points':>7} {'build s':>8} {'warm s':>7} {'update ms':>9} "
+    print("build: BlendingSurface + stencil from scratch; update: W @ X; "
+          "Subsurf (ss) at level L = log2 r")
+    print(f"{'mesh':13} {'L/r':>4} {'points':>7} {'build s':>8} {'update ms':>9} "
           f"{'mem MB':>7} "
           f"{'nnz/row':>7} {'eps0':>6} | {'ss points':>9} {'ss build s':>10} {'ss upd ms':>9} | "
-          f"{'build x':>7} {'warm x':>6} {'update x':>8}")
+          f"{'build x':>7} {'update x':>8}")
     for name, (V, F) in meshes.items():
         for level in (2, 3, 4):
             r = 2 ** level
             ss_build, b = (blender_case(bpy, V, F, level, args.repeats) if bpy is not None
                            else (None, None))
             g = gerbs_case(V, F, r, args.repeats, ss_build)
-            line = (f"{name:13} {level}/{r:<2} {g['points']:7d} {g['build']:8.3f} {g['warm']:7.3f} "
+            line = (f"{name:13} {level}/{r:<2} {g['points']:7d} {g['build']:8.3f} "
                     f"{g['update'] * 1e3:9.2f} {g['mem']:7.0f} {g['nnz']:7.1f} {g['eps0']:6.3f}")
             if bpy is not None:
                 b["build"] = g["ss_build"]
                 line += (f" | {b['points']:9d} {b['build']:10.3f} {b['update'] * 1e3:9.2f} | "
-                         f"{g['build'] / b['build']:7.2f} {g['warm'] / b['build']:6.2f} "
+                         f"{g['build'] / b['build']:7.2f} "
                          f"{g['update'] / b['update']:8.3f}")
             print(line, flush=True)
     if args.tables:

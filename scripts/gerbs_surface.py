@@ -65,8 +65,8 @@ def parse_args(argv):
     p.add_argument("--memory-budget", type=float, default=None, metavar="MB",
                    help="largest memory a build may use, in MB (default 2000)")
     p.add_argument("--merge-distance", type=float, default=None, metavar="D",
-                   help="weld vertices closer than D (Blender's Merge by Distance; 0: only "
-                        "coincident ones) before building; off by default")
+                   help="weld vertices closer than D (0: only coincident ones) before "
+                        "building, e.g. seams split by an exporter; off by default")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     if args.output is None:
@@ -84,6 +84,8 @@ def settings_from(args) -> dict:
     for name in ("alpha", "beta", "gamma", "lam", "sigma", "bfbs_left", "bfbs_right"):
         if getattr(args, name) is not None:
             values[name] = getattr(args, name)
+    if args.merge_distance is not None:  # the core's merge by distance (settings "merge")
+        values.update(merge=True, merge_distance=args.merge_distance)
     if args.memory_budget is not None:
         if not 1.0 <= args.memory_budget <= 1.0e6:  # (also NaN)
             raise UserError(f"--memory-budget: must be in [1, 1e+06] MB, got {args.memory_budget}")
@@ -176,88 +178,17 @@ def gltf_references(path: Path) -> list[Path]:
 
 # --- import ---------------------------------------------------------------------
 
-def split_fans(offsets, corners, n_vertices):
-    """Give every fan of faces around a vertex its own vertex.
-
-    Two corners at one vertex are in the same fan when their faces share an edge
-    at that vertex. A vertex whose corners form k > 1 fans (two surfaces that only
-    touch there, e.g. where Suzanne's eyes meet the head, once a format without
-    connectivity has been joined by position) becomes k vertices. Returns
-    (corners (C,), source vertex of every new vertex (V',)): the first V' = V
-    entries are the identity.
-    """
-    import numpy as np
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    sizes = np.diff(offsets)
-    n = len(corners)
-    face = np.repeat(np.arange(len(sizes)), sizes)
-    pos = np.arange(n) - offsets[face]
-    nxt = corners[offsets[face] + (pos + 1) % sizes[face]]
-    prv = corners[offsets[face] + (pos - 1) % sizes[face]]
-    # the two edges at each corner, as keys vertex * (V + 1) + other end
-    keys = np.tile(corners.astype(np.int64) * (n_vertices + 1), 2) + np.concatenate([nxt, prv])
-    order = np.argsort(keys, kind="stable")
-    same = keys[order[1:]] == keys[order[:-1]]
-    a, b = order[:-1][same] % n, order[1:][same] % n  # corners sharing an edge at their vertex
-    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
-    _, fan = connected_components(graph, directed=False)
-    pairs, inverse = np.unique(np.stack([corners, fan], axis=1), axis=0, return_inverse=True)
-    # per vertex, the fan with the smallest label keeps the vertex; the others get new ones
-    keeps = np.r_[True, pairs[1:, 0] != pairs[:-1, 0]]
-    ids = pairs[:, 0].astype(np.int64)
-    extra = np.flatnonzero(~keeps)
-    ids[extra] = n_vertices + np.arange(len(extra))
-    source = np.concatenate([np.arange(n_vertices), pairs[extra, 0]])
-    return ids[inverse.ravel()].astype(corners.dtype), source
-
-
-def _weld(bpy, obj, distance: float) -> None:
-    import bmesh
-
-    bm = bmesh.new()
-    bm.from_mesh(obj.data)
-    bmesh.ops.remove_doubles(bm, verts=bm.verts, dist=distance)
-    bm.to_mesh(obj.data)
-    bm.free()
-
-
-def _separate_fans(obj) -> int:
-    """split_fans on an imported mesh (positions, faces and material indices kept);
-    returns the number of vertices added."""
-    import numpy as np
-
-    from blender_addon import mesh_io
-
-    mesh = obj.data
-    n_before = len(mesh.vertices)
-    offsets, corners = mesh_io.read_topology(mesh)  # (an imported mesh: nothing holds it)
-    new_corners, source = split_fans(offsets, corners, n_before)
-    if len(source) == n_before:
-        return 0
-    X = mesh_io.read_positions(mesh)[source]
-    materials = np.empty(len(mesh.polygons), dtype=np.int32)
-    mesh.polygons.foreach_get("material_index", materials)
-    faces = [new_corners[a:b].tolist() for a, b in zip(offsets[:-1], offsets[1:])]
-    mesh.clear_geometry()  # (keeps the material slots)
-    mesh.from_pydata(X.tolist(), [], faces)
-    mesh.polygons.foreach_set("material_index", materials)
-    mesh.update()
-    return len(source) - n_before
-
-
-def import_mesh(bpy, path: Path, merge_distance):
+def import_mesh(bpy, path: Path):
     """Import with Blender's importer; return the new mesh objects.
 
     What reaches the surface: OBJ, PLY and glTF faces exactly as indexed in the
     file (glTF exporters split vertices where normals or UVs differ, a PLY
-    exported with UVs is split at UV seams: the surface then has cracks there
-    unless ``merge_distance`` is given); STL has no connectivity: Blender's
-    importer joins corners at identical positions, and fans of faces that this
-    makes meet at a single vertex get their own vertices again (split_fans).
-    ``merge_distance``: Blender's Merge by Distance at that distance, then the
-    same fan separation.
+    exported with UVs is split at UV seams: the surface then has open seams
+    there, named in a warning, unless ``--merge-distance`` is given); STL has no
+    connectivity: Blender's importer joins corners at identical positions. Loose
+    vertices are ignored, bow-ties (e.g. where joining by position makes two
+    fans meet) and non-manifold edges are split by the core's repair
+    (gerbs_core.mesh.repair), which also does the merge by distance.
     """
     before = set(bpy.data.objects)
     ext = path.suffix.lower()
@@ -273,13 +204,7 @@ def import_mesh(bpy, path: Path, merge_distance):
     except RuntimeError as exc:
         from blender_addon.errors import operator_message
         raise UserError(f"cannot read {path.name}: {operator_message(exc)}") from None
-    objects = [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
-    for obj in objects:
-        if merge_distance is not None:
-            _weld(bpy, obj, merge_distance)
-        if merge_distance is not None or ext == ".stl":
-            _separate_fans(obj)
-    return objects
+    return [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
 
 
 # --- export ---------------------------------------------------------------------
@@ -333,7 +258,7 @@ def run(args, src: Path, out: Path, protected) -> None:
     bpy.ops.wm.read_factory_settings(use_empty=True)
     blender_addon.register()
     try:
-        objects = import_mesh(bpy, src, args.merge_distance)
+        objects = import_mesh(bpy, src)
         if not objects:
             raise UserError(f"{args.input} contains no mesh")
         for obj in objects:
@@ -344,8 +269,10 @@ def run(args, src: Path, out: Path, protected) -> None:
                 api.add_surface(obj, progress=silent if args.quiet else text_bar(), **settings)
             except ValueError as exc:
                 raise UserError(f"{obj.name} in {args.input}: {exc}") from None
+            info = api.status(obj)
+            for warning in info.get("warnings", ()):  # repairs: reported, not errors
+                print(f"warning: {obj.name}: {warning.message}", file=sys.stderr)
             if not args.quiet:
-                info = api.status(obj)
                 print(f"{obj.name}: surface with {info['points']} points, "
                       f"{info['triangles']} triangles in {info['build_seconds']:.2f} s",
                       file=sys.stderr)

@@ -22,15 +22,16 @@ i.e. on the knot interval [t_j, t_{j+1}] (w = (theta - t_j) / (t_{j+1} - t_j))
 
 A local function is a straight line (b = 0, a = 1/q: its gauge |y| u_j is
 LINEAR in y) or a constant radius (a = 0). Three certified constructions
-(:mod:`gerbs_core.gauge._envelope_build`); the first that exists is kept (``method``):
+(:mod:`gerbs_core.gauge.blend`, :mod:`gerbs_core.gauge.fallbacks`); the first that exists
+is kept (``method``):
 
 * ``"blend"`` (default): the edges' own lines, pulled in by c in [kappa, 1],
   blended DIRECTLY across each corner by one GERBS transition as wide as the
   certified bound allows (up to half of each adjacent edge; collinear edges
   merged). Widest transitions: on the test meshes max |U + U''|/U 3.7-12 where
   the fillets gave 4.7-80. Certified by rigorous bounds
-  (:func:`~gerbs_core.gauge._envelope_build.closed_form_fit`,
-  :func:`~gerbs_core.gauge._envelope_build.blend_check`), not by the argument below;
+  (:func:`~gerbs_core.gauge.blend.closed_form_fit`,
+  :func:`~gerbs_core.gauge.blend.blend_check`), not by the argument below;
 * ``"fillet"``: exact edge lines, each corner rounded by an inscribed arc
   (knots on the rays of arc points; chords / tangents as local lines);
 * ``"constant"``: DESIGN's rule (knots at the corners, bisection while
@@ -54,15 +55,14 @@ import math
 
 import numpy as np
 
-from ._envelope_build import (build_blend, build_constant, build_fillet, interval_ratios,
-                              line_through)
+from .blend import build_blend
+from .fallbacks import build_constant, build_fillet, interval_ratios
 from ..errors import InvalidParameterError, InvalidPointSetError
 
 __all__ = ["RadialEnvelope"]
 
 TWO_PI = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
-_RTOL = 1e-12        # rounding slack in the certified bounds
 
 
 def _check_unit_interval(name, value, closed_right):
@@ -104,12 +104,37 @@ class RadialEnvelope:
     Attributes: ``theta``, ``radius``, ``normal`` (K,), ``dist`` (K,),
     ``span``, ``closed``, ``kappa``, ``shrink``, ``exact``, ``kernel``,
     ``knots`` (n+1,), ``line_m``, ``line_a``, ``line_b`` (n+1,) (local
-    functions, shrink included), ``method`` ("fillet", "constant" or
+    functions, shrink included), ``method`` ("blend", "fillet", "constant" or
     "exact"), ``min_ratio`` (certified min of rho~/rho).
     """
 
     def __init__(self, theta, radius, closed=True, kappa=0.8, shrink=0.95, kernel=None,
                  exact=False):
+        self._setup(theta, radius, closed, kappa, shrink, kernel, exact)
+        if self.exact:
+            self._finish_exact()
+        else:
+            self._finish_smooth(build_blend(self.theta, self.normal, self.dist, self.closed,
+                                            self.span, self.kappa, self.kernel))
+
+    @classmethod
+    def _adopt(cls, theta, radius, closed, knots, line_m, line_a, line_b, method, min_ratio,
+               kappa, shrink, exact, kernel):
+        """An envelope from already built parts (:meth:`EnvelopeTable.envelope`)."""
+        from .envelope_table import polar_pieces
+        env = cls.__new__(cls)
+        env.closed, env.kappa, env.shrink, env.exact, env.kernel = (closed, kappa, shrink,
+                                                                    exact, kernel)
+        env.theta, env.radius = theta, radius
+        env.span = float(theta[-1] - theta[0])
+        env.normal, env.dist = polar_pieces(theta, radius, np.array([0, len(theta)]))
+        env.knots, env.line_m, env.line_a, env.line_b = knots, line_m, line_a, line_b
+        env.method, env.min_ratio, env._curv = method, min_ratio, None
+        env._freeze()
+        return env
+
+    def _setup(self, theta, radius, closed, kappa, shrink, kernel, exact):
+        """Validation and the exact radius's pieces (normal, dist)."""
         theta = np.array(theta, dtype=np.float64).reshape(-1)
         radius = np.array(radius, dtype=np.float64).reshape(-1)
         if theta.shape != radius.shape:
@@ -123,34 +148,29 @@ class RadialEnvelope:
             from ..kernels import ERBS
             kernel = ERBS()
         self.kernel = kernel
-        _validate_polar(theta, radius, self.closed)
+        from .envelope_table import polar_pieces, validate_stars
+        one = np.array([0, len(theta)])
+        validate_stars(theta, radius, one, np.array([self.closed]))
         self.theta, self.radius = theta, radius
         self.theta.setflags(write=False)
         self.radius.setflags(write=False)
         self.span = float(theta[-1] - theta[0])
-        # pieces: edge k from vertex k to vertex k+1, in the frame of vertex k
-        d = np.diff(theta)
-        r0, r1 = radius[:-1], radius[1:]
-        m_loc, q = line_through(r0, 0.0 * r0, r1 * np.cos(d), r1 * np.sin(d))
-        self.normal = theta[:-1] + m_loc
-        self.dist = q
-        bad = np.flatnonzero(~(q > _RTOL * np.maximum(r0, r1)))
-        if bad.size:
-            raise InvalidPointSetError(
-                "the centre lies on (the line of) a boundary edge; ring indices", 
-                np.unique(np.concatenate([bad, bad + 1])))
-        if self.exact:
-            self.knots = theta.copy()
-            self.line_m = np.append(self.normal, self.normal[-1])
-            self.line_a = 1.0 / (np.append(q, q[-1]) * self.shrink)
-            self.line_b = np.zeros_like(self.line_a)
-            self.min_ratio = self.shrink
-            self.method = "exact"
-        else:
-            self._build_smooth()
+        # pieces: edge k from vertex k to vertex k+1
+        self.normal, self.dist = polar_pieces(theta, radius, one)
+        self._curv = None
+
+    def _freeze(self):
         for a in ("knots", "line_m", "line_a", "line_b", "normal", "dist"):
             getattr(self, a).setflags(write=False)
-        self._curv = None
+
+    def _finish_exact(self):
+        self.knots = self.theta.copy()
+        self.line_m = np.append(self.normal, self.normal[-1])
+        self.line_a = 1.0 / (np.append(self.dist, self.dist[-1]) * self.shrink)
+        self.line_b = np.zeros_like(self.line_a)
+        self.min_ratio = self.shrink
+        self.method = "exact"
+        self._freeze()
 
     # ------------------------------------------------------------------ build
     @classmethod
@@ -215,20 +235,18 @@ class RadialEnvelope:
             r = np.append(r, r[0])
         return cls(theta, r, closed=closed, **kwargs)
 
-    def _build_smooth(self):
-        """Build the certified constructions (see :mod:`._envelope_build`) and keep
-        the first that exists in the order "blend", "fillet", "constant" (the
-        blend, when certified, has the widest transitions; the others are kept
-        as fallbacks: the one with smaller max |U + U''| / U, measured on 16
-        samples per knot interval)."""
-        bl = build_blend(self.theta, self.normal, self.dist, self.closed, self.span,
-                         self.kappa, self.kernel)
+    def _finish_smooth(self, bl):
+        """Keep the certified construction ``bl`` of :mod:`.blend` (the widest
+        transitions) if it exists, else the better of the fallbacks of
+        :mod:`.fallbacks` (smaller max |U + U''| / U, measured on 16 samples per knot
+        interval)."""
         if bl is not None:
             kn, m, a, b, rmin, rmax = bl
             if 1.0 / rmin <= 1.0 + 1e-9 and 1.0 / rmax >= self.kappa * (1.0 - 1e-9):
                 self.method, self.knots, self.line_m = "blend", kn, m
                 self.line_a, self.line_b = a / self.shrink, b / self.shrink
                 self.min_ratio = self.shrink / rmax
+                self._freeze()
                 return
         period = self.span if self.closed else None
         cands = []
@@ -255,6 +273,7 @@ class RadialEnvelope:
         self.line_a = a / self.shrink
         self.line_b = b / self.shrink
         self.min_ratio = self.shrink * worst
+        self._freeze()
 
     # ------------------------------------------------------------- evaluation
     def _reduce(self, theta, start=None):
@@ -349,26 +368,33 @@ class RadialEnvelope:
 
 
 def _eval_u(x, t, m, A, B, kernel, nmax, exact):
-    """GERBS spline u~ = sum_j G_j u_j (eq. (3)) and its derivatives at x.
-
-    On [t_j, t_j+1]: u~ = u_j + F(w) (u_j+1 - u_j), w = (x - t_j)/h_j, and by
-    Leibniz u~^(nu) = u_j^(nu) + sum_i C(nu,i) F^(i)(w) h^-i D^(nu-i).
-    Local functions u_j = A_j cos(x - m_j) + B_j. ``exact``: no blending.
-    """
+    """GERBS spline u~ = sum_j G_j u_j (eq. (3)) and its derivatives at x (one envelope:
+    knots t, local functions u_j = A_j cos(x - m_j) + B_j). ``exact``: no blending."""
     j = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
+    return _eval_pieces(x, t[j], t[j + 1], m[j], m[j + 1], A[j], A[j + 1], B[j], B[j + 1],
+                        kernel, nmax, exact)
+
+
+def _eval_pieces(x, t0, t1, m0, m1, A0, A1, B0, B1, kernel, nmax, exact):
+    """u~ and its derivatives at x on the knot intervals [t0, t1] (all arrays of x's shape),
+    the local functions u_0 = A0 cos(x - m0) + B0 and u_1 likewise.
+
+    u~ = u_0 + F(w) (u_1 - u_0), w = (x - t0)/h, and by Leibniz
+    u~^(nu) = u_0^(nu) + sum_i C(nu,i) F^(i)(w) h^-i D^(nu-i), D = u_1 - u_0.
+    """
     out = np.empty((nmax + 1,) + x.shape)
     phase = [i * _HALF_PI for i in range(nmax + 1)]
-    a = [A[j] * np.cos(x - m[j] + ph) for ph in phase]
-    a[0] = a[0] + B[j]
+    a = [A0 * np.cos(x - m0 + ph) for ph in phase]
+    a[0] = a[0] + B0
     if exact:
         out[:] = a
         return out
-    h = t[j + 1] - t[j]
+    h = t1 - t0
     # (1-d input: some kernels mishandle 0-d arrays)
-    w = np.atleast_1d((x - t[j]) / h)
+    w = np.atleast_1d((x - t0) / h)
     F = kernel.cdf_derivs(w, nmax).reshape((nmax + 1,) + x.shape)
-    D = [A[j + 1] * np.cos(x - m[j + 1] + ph) - ai for ph, ai in zip(phase, a)]
-    D[0] = D[0] + B[j + 1]
+    D = [A1 * np.cos(x - m1 + ph) - ai for ph, ai in zip(phase, a)]
+    D[0] = D[0] + B1
     hinv = 1.0 / h
     for nu in range(nmax + 1):
         acc = a[nu].copy()
@@ -378,6 +404,7 @@ def _eval_u(x, t, m, A, B, kernel, nmax, exact):
             hp = hp * hinv
         out[nu] = acc
     return out
+
 
 def _reciprocal_derivs(u):
     """Derivatives of 1/u from those of u (orders 0..3), stacked like ``u``."""
@@ -392,27 +419,3 @@ def _reciprocal_derivs(u):
     if nmax >= 3:
         out[3] = -u[3] * inv ** 2 + 6 * u[1] * u[2] * inv ** 3 - 6 * u[1] ** 3 * inv ** 4
     return out
-
-
-def _validate_polar(theta, radius, closed):
-    if theta.ndim != 1 or len(theta) < 2:
-        raise InvalidParameterError("theta", "need at least 2 boundary vertices (K+1 >= 2)")
-    if closed and len(theta) < 3:
-        raise InvalidPointSetError("a closed star needs at least 2 edges (K+1 >= 3 vertices)")
-    bad = np.flatnonzero(~(np.isfinite(theta) & np.isfinite(radius)))
-    if bad.size:
-        raise InvalidPointSetError("non-finite boundary vertex at indices", bad)
-    bad = np.flatnonzero(~(radius > 0))
-    if bad.size:
-        raise InvalidPointSetError("boundary vertex radius must be > 0 at indices", bad)
-    d = np.diff(theta)
-    bad = np.flatnonzero(~((d > 0) & (d < math.pi)))
-    if bad.size:
-        raise InvalidPointSetError(
-            "not star-shaped w.r.t. the centre: each edge must subtend an angle in (0, pi); "
-            "vertex indices", np.unique(np.concatenate([bad, bad + 1])))
-    if closed:
-        if abs(radius[-1] - radius[0]) > 1e-9 * radius[0]:
-            raise InvalidPointSetError(
-                "closed star: the last vertex must repeat the first (radius differs)",
-                [0, len(radius) - 1])

@@ -1,6 +1,6 @@
 """Blending surfaces over polygon meshes (paper sections 4-5 on a 2-manifold domain).
 
-Stage by stage (docs/design.md): :mod:`.topology`, :mod:`.validation`,
+Stage by stage (docs/design.md): :mod:`.repair`, :mod:`.topology`, :mod:`.validation`,
 :mod:`.layout`, :mod:`.charts`, :mod:`.cover`, :mod:`.rings`, :mod:`.fits`,
 :mod:`.agreement`, :mod:`.evaluate`, :mod:`.lattice`, :mod:`.assembly`,
 :mod:`.stencil`, :mod:`.surface`.

@@ -6,15 +6,16 @@ of v's star, the union of its faces. supp psi_v then lies compactly inside the
 open star (minimal supports, so B_v = Psi_v, eq. (73)), and psi_v is
 C-infinity (ERBS kernels). The star's boundary is the far edges of its faces.
 
-Stars of the same shape up to rotation share one envelope object (also across
-surfaces, through a bounded process-wide memo: a rebuild after a settings
-change reuses them).
+Stars of the same shape up to rotation share one envelope; all envelopes are built in
+one vectorized pass (:func:`gerbs_core.gauge.envelope_table.envelope_table`).
 """
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
-__all__ = ["StarCover", "star_cover", "star_boundary", "clear_envelope_cache", "require_cover"]
+__all__ = ["StarCover", "star_cover", "star_boundary", "require_cover"]
 
 
 def require_cover(eps: float, kernel) -> None:
@@ -61,156 +62,166 @@ def star_boundary(topo, charts, corners2d: np.ndarray, v: int, first=0, last=Non
 def far_corner_polar(topo, charts, corners2d):
     """Per corner c: unfolded polar (theta, r) of its face's corners next(c) ... prev(c).
 
-    Returns three lists indexed by corner: theta and r (arrays of length n-1),
-    computed with one vectorized call per face size, and a bytes signature of the
-    sector's shape (equal signatures: congruent sectors).
+    Returns (theta (C, W), r (C, W), count (C,), shape (C,)): the n - 1 far corners of
+    c's n-gon in the first count[c] = n - 1 columns (W = n_max - 1; padding 0), one
+    vectorized call per face size, and equal shape ids for congruent sectors (angles
+    relative to the sector's start and radii equal to 1e-11).
     """
-    sizes = topo.face_sizes
-    cf, off = topo.corner_face, topo.face_offsets
-    th_l = [None] * topo.n_corners
-    r_l = [None] * topo.n_corners
-    sig = [None] * topo.n_corners
+    sizes, cf, off = topo.face_sizes, topo.corner_face, topo.face_offsets
+    W = int(sizes.max()) - 1
+    C = topo.n_corners
+    th = np.zeros((C, W))
+    rr = np.zeros((C, W))
+    count = sizes[cf] - 1
     for n in np.unique(sizes).tolist():
         cs = np.flatnonzero(sizes[cf] == n)
         k = cs - off[cf[cs]]
         idx = off[cf[cs]][:, None] + (k[:, None] + 1 + np.arange(n - 1)[None, :]) % n
         r, t = charts.unfolded(np.broadcast_to(cs[:, None], idx.shape), corners2d[idx])
-        # shape signature of the sector (angles relative to its start, radii), rounded
-        key = np.round(np.concatenate([t - t[:, :1], r], axis=1), 11)
-        for c, tt, rr, kk in zip(cs.tolist(), t, r, key):
-            th_l[c], r_l[c], sig[c] = tt, rr, kk.tobytes()
-    return th_l, r_l, sig
+        th[cs, :n - 1], rr[cs, :n - 1] = t, r
+    key = np.round(np.concatenate([count[:, None], th - th[:, :1], rr], axis=1), 11)
+    key[:, 1:W + 1] = np.where(np.arange(W) < count[:, None], key[:, 1:W + 1], 0.0)
+    _, shape = np.unique(key, axis=0, return_inverse=True)
+    return th, rr, count, shape.reshape(-1)
 
 
-# Process-wide memo of envelopes (immutable objects) by exact star shape and settings:
-# symmetric meshes repeat star shapes, and a rebuild after a settings change (Blender
-# add-on) reuses them. clear_envelope_cache() empties it (benchmarks time cold builds).
-_ENVELOPE_CACHE: dict = {}
-_ENVELOPE_CACHE_SIZE = 4096
+def _canonical_rotation(seq):
+    """Per row of seq (n, k) the rotation j whose sequence seq[j:] + seq[:j] is
+    lexicographically smallest (the first such j): rotated copies of a star shape then
+    read the same."""
+    n, k = seq.shape
+    rot = (np.arange(k)[:, None] + np.arange(k)[None, :]) % k            # (k, k)
+    R = seq[:, rot]                                                       # (n, k, k)
+    alive = np.ones((n, k), dtype=bool)
+    big = np.iinfo(np.int64).max
+    for t in range(k):
+        col = np.where(alive, R[:, :, t], big)
+        alive &= col == col.min(axis=1, keepdims=True)
+    return np.argmax(alive, axis=1)
 
 
-def clear_envelope_cache() -> None:
-    """Forget all memoized star envelopes."""
-    _ENVELOPE_CACHE.clear()
+def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95, exact=False,
+                    kernel=None):
+    """Smooth envelopes of all vertex stars, in one
+    :class:`~gerbs_core.gauge.envelope_table.EnvelopeTable`.
 
-
-def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95,
-                    exact=False, kernel=None):
-    """Smooth star envelopes (:class:`gerbs_core.gauge.envelope.RadialEnvelope`) of all charts.
-
-    Returns (envelopes (list), corner_envelope (C,) int, corner_offset (C,)): the
-    envelope serving each corner's sector, evaluated at theta - corner_offset.
-    One closed envelope per interior vertex, one open envelope per boundary
-    fan (a function of the unfolded angle; only the chart angle is compressed).
-    Stars of the same shape up to rotation share one object.
+    Returns (table, corner_envelope (C,) int, corner_offset (C,)): the envelope serving
+    each corner's sector, evaluated at theta - corner_offset. One closed envelope per
+    interior vertex, one open envelope per boundary fan (a function of the unfolded angle;
+    only the chart angle is compressed). Stars of the same shape up to rotation share one
+    envelope. Array operations over all stars (grouped by valence), no per-vertex work.
     """
-    from ..gauge.envelope import RadialEnvelope
-    cache, envs = {}, []
+    from ..gauge.envelope_table import envelope_table
+    so = np.asarray(topo.star_offsets, dtype=np.int64)
+    sc = np.asarray(topo.star_corners, dtype=np.int64)
+    th, rr, count, shape = far_corner_polar(topo, charts, corners2d)
+    val = np.diff(so)
+    closed_v = ~np.asarray(charts.boundary, dtype=bool)
     corner_env = np.full(topo.n_corners, -1, dtype=np.int64)
     env_offset = np.zeros(topo.n_corners)
-    so = topo.star_offsets
-    th_l, r_l, sig = far_corner_polar(topo, charts, corners2d)
-    settings = (float(kappa), float(shrink), bool(exact), kernel)
-
-    def get(sigs, closed, make):
-        key = (closed, settings, tuple(sigs))
-        j = cache.get(key)
-        if j is None:
-            env = _ENVELOPE_CACHE.get(key)
-            if env is None:
-                th, r = make()
-                env = RadialEnvelope(th - th[0], r, closed=closed, kappa=kappa, shrink=shrink,
-                                     kernel=kernel, exact=exact)
-                if len(_ENVELOPE_CACHE) >= _ENVELOPE_CACHE_SIZE:
-                    _ENVELOPE_CACHE.pop(next(iter(_ENVELOPE_CACHE)))
-                _ENVELOPE_CACHE[key] = env
-            envs.append(env)
-            j = cache[key] = len(envs) - 1
-        return j
-
-    def chain(star):
-        th = [th_l[c][:-1] for c in star] + [th_l[star[-1]][-1:]]
-        rr = [r_l[c][:-1] for c in star] + [r_l[star[-1]][-1:]]
-        return np.concatenate(th), np.concatenate(rr)
-
-    def closed_chain(rot, T):
-        base = charts.theta0[rot[0]]
-        th = np.concatenate([th_l[c][:-1] - base for c in rot] + [[T]])
-        th[:-1] = np.where(th[:-1] < -1e-9 * T, th[:-1] + T, th[:-1])  # after the seam: + T
-        th[0] = 0.0
-        rr = np.concatenate([r_l[c][:-1] for c in rot] + [r_l[rot[0]][:1]])
-        return th, rr
-
-    for v in range(topo.n_vertices):
-        star = topo.star_corners[so[v]:so[v + 1]].tolist()
-        sigs = [sig[c] for c in star]
-        if not charts.boundary[v]:
-            # canonical rotation (smallest sector-signature sequence), so that rotated
-            # copies of one star shape share an envelope
-            k = len(star)
-            j = min(range(k), key=lambda i: sigs[i:] + sigs[:i])
-            rot = star[j:] + star[:j]
-            T = charts.span[v]
-            e = get(sigs[j:] + sigs[:j], True, lambda: closed_chain(rot, T))
-            corner_env[star] = e
-            env_offset[star] = charts.theta0[rot[0]]
-            continue
-        e = get(sigs, False, lambda: chain(star))
-        corner_env[star] = e
-        env_offset[star] = th_l[star[0]][0]
-    return envs, corner_env, env_offset
+    reps, rep_closed = [], []            # per group: the representative stars (corners)
+    n_env = 0
+    for k in np.unique(val[val > 0]).tolist():
+        for cl in (True, False):
+            vs = np.flatnonzero((val == k) & (closed_v == cl))
+            if not len(vs):
+                continue
+            stars = sc[so[vs][:, None] + np.arange(k)[None, :]]          # (n, k) corners
+            if cl:
+                j = _canonical_rotation(shape[stars])
+                stars = stars[np.arange(len(vs))[:, None], (j[:, None] + np.arange(k)) % k]
+            _, first, inv = np.unique(shape[stars], axis=0, return_index=True,
+                                      return_inverse=True)
+            corner_env[stars] = (n_env + inv.reshape(-1))[:, None]
+            start = charts.theta0[stars[:, 0]] if cl else th[stars[:, 0], 0]
+            env_offset[stars] = start[:, None]
+            reps.append(stars[first])
+            rep_closed.append(cl)
+            n_env += len(first)
+    theta, radius, ptr, closed = _chains(reps, rep_closed, th, rr, count, charts)
+    table = envelope_table(theta, radius, ptr, closed, kappa=kappa, shrink=shrink,
+                           kernel=kernel, exact=exact)
+    return table, corner_env, env_offset
 
 
-def eval_envelopes(envelopes, corner_env, env_offset, corners: np.ndarray, theta: np.ndarray,
+def _chains(reps, rep_closed, th, rr, count, charts):
+    """Ragged polar vertex lists (theta, radius, ptr, closed) of the representative stars:
+    each corner's far corners but its last (the next sector's first), then the closing
+    vertex (closed: the first again at theta = span; open: the last corner's last far
+    corner). Angles start at 0 (closed: from the first sector's start, wrapped)."""
+    th_all, r_all, closed_all, ptr = [], [], [], [0]
+    W = th.shape[1]
+    for stars, cl in zip(reps, rep_closed):
+        n = len(stars)
+        use = (np.arange(W)[None, None, :] < (count[stars] - 1)[..., None]).reshape(n, -1)
+        t = th[stars]                                                       # (n, k, W)
+        if cl:
+            T = charts.span[charts.corner_vertex[stars[:, 0]]]
+            t = t - charts.theta0[stars[:, 0]][:, None, None]
+            t = np.where(t < -1e-9 * T[:, None, None], t + T[:, None, None], t)  # the seam
+            end_t, end_r = T, rr[stars[:, 0], 0]
+        else:
+            last = stars[:, -1]
+            end_t, end_r = th[last, count[last] - 1], rr[last, count[last] - 1]
+        per = use.sum(axis=1) + 1
+        starts = np.concatenate([[0], np.cumsum(per)[:-1]])
+        body = np.ones(int(per.sum()), dtype=bool)
+        body[starts + per - 1] = False
+        tt = np.empty(len(body))
+        rv = np.empty(len(body))
+        tt[body], rv[body] = t.reshape(n, -1)[use], rr[stars].reshape(n, -1)[use]
+        tt[~body], rv[~body] = end_t, end_r
+        if cl:
+            tt[starts] = 0.0
+        else:
+            tt -= np.repeat(tt[starts], per)
+        th_all.append(tt)
+        r_all.append(rv)
+        closed_all.append(np.full(n, cl))
+        ptr.extend((ptr[-1] + np.cumsum(per)).tolist())
+    return (np.concatenate(th_all), np.concatenate(r_all), np.array(ptr, dtype=np.int64),
+            np.concatenate(closed_all))
+
+
+def eval_envelopes(table, corner_env, env_offset, corners: np.ndarray, theta: np.ndarray,
                    nu: int):
     """[u~, u~', u~''] (up to nu), u~ = 1/rho~, of the envelope serving each corner.
 
-    theta (..., P): unfolded angles (chart of the corner's vertex); corners either
-    of theta's shape or of shape theta.shape[:-1] (one corner per row of P
-    samples: grouping then works on rows, cheaply).
+    table: :class:`gerbs_core.gauge.envelope_table.EnvelopeTable` of the cover's envelopes;
+    theta (..., P): unfolded angles (chart of the corner's vertex); corners either of
+    theta's shape, or broadcastable against it, or of shape theta.shape[:-1] (one corner
+    per row of P samples).
     """
     theta = np.asarray(theta, dtype=np.float64)
     corners = np.asarray(corners)
-    if corners.shape == theta.shape:
-        rows_c, th2 = corners.reshape(-1, 1), theta.reshape(-1, 1)
-    else:
-        rows_c, th2 = corners.reshape(-1), theta.reshape(-1, theta.shape[-1])
-        rows_c = rows_c[:, None]
-    rows_c = rows_c[:, 0]
-    out = np.empty((nu + 1,) + th2.shape)
-    e = corner_env[rows_c]
-    order = np.argsort(e, kind="stable")
-    es = e[order]
-    cut = np.flatnonzero(np.diff(es)) + 1
-    for a, b in zip(np.concatenate([[0], cut]), np.concatenate([cut, [len(es)]])):
-        idx = order[a:b]
-        env = envelopes[es[a]]
-        ti = th2[idx] - env_offset[rows_c[idx]][:, None]
-        if not env.closed:
-            # stay inside [theta_0, theta_K] (round-off of the unfolded angle; outside,
-            # the end lines would be extrapolated)
-            ti = np.clip(ti, env.theta[0], env.theta[-1])
-        out[:, idx] = env.u_derivs(ti, nu)
-    return [out[k].reshape(theta.shape) for k in range(nu + 1)]
+    if corners.ndim and corners.shape == theta.shape[:-1]:
+        corners = corners[..., None]        # one corner per row of samples
+    u = table.u_derivs(corner_env[corners], theta - env_offset[corners], nu)
+    return [u[k] for k in range(nu + 1)]
 
 
 class StarCover:
     """The size functions psi_v of all vertices (immutable).
 
-    ``envelopes`` (list of RadialEnvelope), ``corner_env`` (C,) the envelope serving
-    each corner's sector, ``env_offset`` (C,) its angle offset, ``kernel`` the GERBS
-    kernel of the bumps.
+    ``table`` (:class:`~gerbs_core.gauge.envelope_table.EnvelopeTable`): the star envelopes;
+    ``envelopes`` the same as :class:`~gerbs_core.gauge.envelope.RadialEnvelope` objects
+    (made on first use); ``corner_env`` (C,) the envelope serving each corner's sector,
+    ``env_offset`` (C,) its angle offset, ``kernel`` the GERBS kernel of the bumps.
     """
 
-    def __init__(self, envelopes, corner_env, env_offset, kernel):
-        self.envelopes = tuple(envelopes)
+    def __init__(self, table, corner_env, env_offset, kernel):
+        self.table = table
         corner_env.flags.writeable = False
         env_offset.flags.writeable = False
         self.corner_env, self.env_offset, self.kernel = corner_env, env_offset, kernel
 
+    @cached_property
+    def envelopes(self) -> tuple:
+        return tuple(self.table.envelope(i) for i in range(len(self.table)))
+
     def reciprocal_radius(self, corners, theta, nu: int):
         """[u~, u~', u~''] (u~ = 1 / rho~) of each corner's envelope at unfolded angles theta."""
-        return eval_envelopes(self.envelopes, self.corner_env, self.env_offset, corners, theta, nu)
+        return eval_envelopes(self.table, self.corner_env, self.env_offset, corners, theta, nu)
 
     def psi_jet(self, charts, corners, x, nu: int, pol=None):
         """Jet of psi_v = b(r u~(theta)) at face points x (..., 2) of the corners' faces
@@ -228,6 +239,6 @@ def star_cover(topo, charts, corners2d, kernel, kappa=0.8, shrink=0.95, exact=Fa
     """The star cover of a mesh with face layouts corners2d (see the module docstring).
     ``exact``: the exact (kinked) star radius instead of the smooth envelope -- a
     deliberately non-smooth variant, the control of the smoothness tests."""
-    envs, ce, eo = build_envelopes(topo, charts, corners2d, kappa=kappa, shrink=shrink,
-                                   exact=exact, kernel=kernel)
-    return StarCover(envs, ce, eo, kernel)
+    table, ce, eo = build_envelopes(topo, charts, corners2d, kappa=kappa, shrink=shrink,
+                                    exact=exact, kernel=kernel)
+    return StarCover(table, ce, eo, kernel)

@@ -12,7 +12,7 @@ chart is rotated (the surface does not depend on the vertex or face
 numbering) and reproduces every polynomial of its degree exactly when the data
 determine one (flat-mesh reproduction).
 
-:func:`candidate_fits` makes the data fits of one candidate rule (degree and
+:func:`candidate_fits_all` makes the data fits of the candidate rules (degree and
 data rings, :mod:`gerbs_core.mesh.rings`) for all vertices at once, batched by
 the number of data.
 """
@@ -23,7 +23,8 @@ import scipy.sparse as sp
 
 from .monomials import bending_gram, monomial_exponents, monomials, n_monomials
 
-__all__ = ["RCOND", "CANDIDATES", "pinned_normal_inverse", "candidate_fits", "CandidateFits"]
+__all__ = ["RCOND", "CANDIDATES", "pinned_normal_inverse", "candidate_fits",
+           "candidate_fits_all", "CandidateFits"]
 
 # relative eigenvalue cut-off of the normal matrices (in the bending metric, scaled
 # coordinates y / h): a normal-matrix eigenvalue of 1e-8 is a singular value of 1e-4 of
@@ -65,25 +66,6 @@ class CandidateFits:
         self.degree, self.matrix, self.normal, self.rhs = degree, matrix, normal, rhs
 
 
-def _condition(rings, degree, cnt, layers):
-    """(V,) condition numbers of the fits' normal matrices on rings <= layers, in scaled
-    monomials (the original design's criterion)."""
-    V = len(cnt)
-    out = np.full(V, np.inf)
-    pad = 2 ** np.ceil(np.log2(np.maximum(cnt, 1))).astype(np.int64)
-    for n in np.unique(pad).tolist():
-        vs = np.flatnonzero(pad == n)
-        k = np.arange(n)[None, :]
-        idx = rings.offsets[vs][:, None] + np.minimum(k, cnt[vs][:, None] - 1)
-        use = (k < cnt[vs][:, None]) & (rings.ring[idx] <= layers)
-        y = rings.y[idx] / rings.h[vs][:, None, None]
-        w = _data_weights(y, use)
-        B = monomials(y, degree)[0]
-        lam = np.linalg.eigvalsh(np.einsum("kn,knm,knl->kml", w, B, B))
-        out[vs] = lam[:, -1] / np.maximum(lam[:, 0], 1e-300)
-    return out
-
-
 def _data_weights(y, use):
     """1 / |y|^2 for scaled chart positions y (h = 1) of the data used, 0 elsewhere: near
     data count more (the fit is used near its vertex)."""
@@ -91,26 +73,34 @@ def _data_weights(y, use):
     return np.where(use & (d > 0), 1.0 / np.where(d > 0, d, 1.0) ** 2, 0.0)
 
 
+def _normal(B, w):
+    """Normal matrices (K, M, M) = B^T diag(w) B of designs B (K, n, M), weights w (K, n)."""
+    return np.swapaxes(B * w[..., None], 1, 2) @ B
+
+
 def candidate_fits(rings, degree: int, layers: int) -> CandidateFits:
-    """Data fits of `degree` on rings <= `layers`, batched by data count. A ring-1 fit takes
-    ring 2 as well where ring 1 has fewer than M + 2 data (M the number of coefficients) or
-    leaves the fit ill-conditioned (normal-matrix condition above ``MAX_CONDITION``: one-sided
-    boundary stars); a fit on rings 1-2 takes ring 3 where they hold fewer than M + 2 data."""
+    """The data fits of one rule (:func:`candidate_fits_all`)."""
+    return candidate_fits_all(rings, [(degree, layers)])[0]
+
+
+def candidate_fits_all(rings, rules) -> list:
+    """Data fits of every rule (degree, layers) in ``rules``, batched by data count (the
+    batches' chart positions and monomials shared by all rules).
+
+    A ring-1 fit takes ring 2 as well where ring 1 has fewer than M + 2 data (M the number
+    of coefficients) or leaves the fit ill-conditioned (normal-matrix condition above
+    ``MAX_CONDITION``, scaled monomials: one-sided boundary stars); a fit on rings 1-2
+    takes ring 3 where they hold fewer than M + 2 data."""
     V = len(rings.offsets) - 1
-    M = n_monomials(degree)
-    deg_of = monomial_exponents(degree).sum(1)
+    dmax = max(d for d, _ in rules)
     cnt = np.diff(rings.offsets)
     owner = np.repeat(np.arange(V), cnt)
     n1 = np.bincount(owner[rings.ring == 1], minlength=V)
     n2 = np.bincount(owner[rings.ring <= 2], minlength=V)
     wider = 3 if np.any(rings.ring == 3) else 2
-    use_layers = np.full(V, layers)
-    if layers < 2:
-        use_layers = np.where((n1 < M + 2) | (_condition(rings, degree, cnt, 1) > MAX_CONDITION),
-                              2, use_layers)
-    use_layers = np.where((use_layers == 2) & (n2 < M + 2), wider, use_layers)
-    normal = np.zeros((V, M, M))
-    rows, cols, vals, hrows, hcols, hvals = [], [], [], [], [], []
+    out = []
+    acc = [{"normal": np.zeros((V, n_monomials(d), n_monomials(d))), "rows": [], "cols": [],
+            "vals": [], "hvals": []} for d, _ in rules]
     # batches of equal padded length (powers of two): little padding for high valences
     pad = 2 ** np.ceil(np.log2(np.maximum(cnt, 1))).astype(np.int64)
     for n in np.unique(pad).tolist():
@@ -118,37 +108,41 @@ def candidate_fits(rings, degree: int, layers: int) -> CandidateFits:
         k = np.arange(n)[None, :]
         idx = rings.offsets[vs][:, None] + np.minimum(k, cnt[vs][:, None] - 1)
         real = k < cnt[vs][:, None]
+        ring = rings.ring[idx]
         y = rings.y[idx] / rings.h[vs][:, None, None]
-        use = real & (rings.ring[idx] <= use_layers[vs][:, None])
-        w = _data_weights(y, use)
-        w /= np.maximum(w.sum(1, keepdims=True), 1e-300)  # per vertex: weights sum to 1
-        B = monomials(y, degree)[0]                          # (K, n, M)
-        N = np.einsum("kn,knm,knl->kml", w, B, B)
-        normal[vs] = N
-        Pinv = pinned_normal_inverse(N, degree)
-        Ws = Pinv @ np.swapaxes(B * w[..., None], 1, 2)      # (K, M, n): scaled coefficients
-        A = Ws / rings.h[vs][:, None, None] ** deg_of[None, :, None]
-        r = vs[:, None, None] * M + np.arange(M)[None, :, None]
-        q = rings.ids[idx][:, None, :]
-        keep = np.broadcast_to(use[:, None, :], A.shape)
-        rows.append(np.broadcast_to(r, A.shape)[keep])
-        cols.append(np.broadcast_to(q, A.shape)[keep])
-        vals.append(A[keep])
-        # the pin: - sum_j A_j X_v
-        rows.append((vs[:, None] * M + np.arange(M)).ravel())
-        cols.append(np.repeat(vs, M))
-        vals.append(-(A * use[:, None, :]).sum(2).ravel())
-        # right-hand sides B^T W (X_q - X_v) of the scaled normal equations
-        bw = np.swapaxes(B * w[..., None], 1, 2)             # (K, M, n)
-        hrows.append(np.broadcast_to(r, bw.shape)[keep])
-        hcols.append(np.broadcast_to(q, bw.shape)[keep])
-        hvals.append(bw[keep])
-        hrows.append((vs[:, None] * M + np.arange(M)).ravel())
-        hcols.append(np.repeat(vs, M))
-        hvals.append(-bw.sum(2).ravel())
-    shape = (V * M, V)
-    matrix = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                           shape=shape)
-    rhs = sp.csr_matrix((np.concatenate(hvals), (np.concatenate(hrows), np.concatenate(hcols))),
-                        shape=shape)
-    return CandidateFits(degree, matrix, normal, rhs)
+        Ball = monomials(y, dmax)[0]                          # (K, n, M_max)
+        q = rings.ids[idx]
+        for (degree, layers), a in zip(rules, acc):
+            M = n_monomials(degree)
+            B = Ball[..., :M]
+            use_layers = np.full(len(vs), layers)
+            if layers < 2:
+                N1 = _normal(B, _data_weights(y, real & (ring <= 1)))
+                lam = np.linalg.eigvalsh(N1)
+                cond = lam[:, -1] / np.maximum(lam[:, 0], 1e-300)
+                use_layers = np.where((n1[vs] < M + 2) | (cond > MAX_CONDITION), 2, use_layers)
+            use_layers = np.where((use_layers == 2) & (n2[vs] < M + 2), wider, use_layers)
+            use = real & (ring <= use_layers[:, None])
+            w = _data_weights(y, use)
+            w /= np.maximum(w.sum(1, keepdims=True), 1e-300)  # per vertex: weights sum to 1
+            bw = np.swapaxes(B * w[..., None], 1, 2)          # (K, M, n)
+            N = bw @ B
+            a["normal"][vs] = N
+            Pinv = pinned_normal_inverse(N, degree)
+            deg_of = monomial_exponents(degree).sum(1)
+            A = (Pinv @ bw) / rings.h[vs][:, None, None] ** deg_of[None, :, None]  # unscaled
+            kk, nn = np.nonzero(use)
+            r = vs[:, None] * M + np.arange(M)[None, :]         # (K, M) rows
+            # data entries (one per used datum and monomial), then the pins - sum_j A_j X_v
+            a["rows"] += [r[kk].ravel(), r.ravel()]
+            a["cols"] += [np.repeat(q[kk, nn], M), np.repeat(vs, M)]
+            a["vals"] += [A[kk, :, nn].ravel(), -(A * use[:, None, :]).sum(2).ravel()]
+            # right-hand sides B^T W (X_q - X_v) of the scaled normal equations
+            a["hvals"] += [bw[kk, :, nn].ravel(), -bw.sum(2).ravel()]
+    for (degree, _), a in zip(rules, acc):
+        shape = (V * n_monomials(degree), V)
+        rows, cols = np.concatenate(a["rows"]), np.concatenate(a["cols"])
+        matrix = sp.csr_matrix((np.concatenate(a["vals"]), (rows, cols)), shape=shape)
+        rhs = sp.csr_matrix((np.concatenate(a["hvals"]), (rows, cols)), shape=shape)
+        out.append(CandidateFits(degree, matrix, a["normal"], rhs))
+    return out

@@ -31,21 +31,39 @@ def _canonical(m):
     return m
 
 
+def _scatter_add(points, m, values) -> None:
+    """points[m.row] += m.data * values[m.col] (summed per row): the hit rows sorted once
+    and each column summed by bincount (np.add.at is an order of magnitude slower)."""
+    if m.nnz == 0:
+        return
+    hit, inv = np.unique(m.row, return_inverse=True)
+    for k in range(values.shape[1]):
+        points[hit, k] += np.bincount(inv, weights=m.data * values[m.col, k],
+                                      minlength=len(hit))
+
+
 class Stencil:
     """The output points of a surface at one resolution as a linear map of the positions.
 
-    Attributes: ``base`` B (P, V), ``mono`` E (P, V M), ``operator`` A (V M, V) (csr);
-    ``triangles`` (T, 3), ``vertex_samples`` (V,) the output point of each vertex,
-    ``lattice`` (:class:`gerbs_core.mesh.lattice.Lattice`). Immutable; the transposes
-    for partial updates are made on first use.
+    Attributes: ``base`` B (P, V), ``mono`` E (P, V M) (csr), ``fits`` the coefficient
+    map (:class:`gerbs_core.mesh.coupling.CoupledFits`, c = A X) and ``operator`` A
+    (V M, V) (csr, made on first use: a full build needs only ``fits(X)``, partial
+    updates need A); ``triangles`` (T, 3), ``vertex_samples`` (V,) the output point of
+    each vertex, ``lattice`` (:class:`gerbs_core.mesh.lattice.Lattice`). Immutable; the
+    transposes for partial updates are made on first use.
     """
 
-    def __init__(self, base, mono, operator, lattice):
-        self.base, self.mono, self.operator = (_canonical(m) for m in (base, mono, operator))
+    def __init__(self, base, mono, fits, lattice):
+        self.base, self.mono = _canonical(base), _canonical(mono)
+        self.fits = fits
         self.lattice = lattice
         self.triangles = lattice.triangles
         self.vertex_samples = lattice.vertex_sample
         self._csc = None
+
+    @property
+    def operator(self) -> sp.csr_matrix:
+        return self.fits.operator
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -57,33 +75,33 @@ class Stencil:
         return self.base.nnz + self.mono.nnz + self.operator.nnz
 
     def apply(self, X) -> np.ndarray:
-        """Output points (P, k) for vertex positions X (V, k) (bitwise the same sums for
-        every k: one column at a time)."""
+        """Output points (P, k) for vertex positions X (V, k) (the same sums for every k:
+        one column at a time)."""
         X = np.asarray(X, dtype=np.float64)
         if X.ndim == 1:
-            return self.base @ X + self.mono @ (self.operator @ X)
+            return self.base @ X + self.mono @ self.fits(X)
+        C = self.fits(X)
         out = np.empty((self.base.shape[0], X.shape[1]))
         for k in range(X.shape[1]):
-            xk = np.ascontiguousarray(X[:, k])
-            out[:, k] = self.base @ xk + self.mono @ (self.operator @ xk)
+            xk, ck = np.ascontiguousarray(X[:, k]), np.ascontiguousarray(C[:, k])
+            out[:, k] = self.base @ xk + self.mono @ ck
         return out
 
     def apply_moved(self, points: np.ndarray, moved: np.ndarray, delta: np.ndarray) -> None:
         """points += the change of the output when the vertices ``moved`` (m,) move by
         ``delta`` (m, k), in place, touching only the affected rows (exact up to round-off:
-        the same sums regrouped)."""
+        the same sums regrouped). Needs only the moved vertices' columns of the
+        coefficient operator (:meth:`CoupledFits.columns`), never the whole operator."""
         if self._csc is None:
-            self._csc = (self.base.tocsc(), self.operator.tocsc(), self.mono.tocsc())
-        Bc, Ac, Ec = self._csc
+            self._csc = (self.base.tocsc(), self.mono.tocsc())
+        Bc, Ec = self._csc
         moved = np.asarray(moved, dtype=np.int64)
         dB = Bc[:, moved]
-        dc = Ac[:, moved] @ delta                       # (V M, k) coefficient changes
+        dc = self.fits.columns(moved) @ delta           # (V M, k) coefficient changes
         rows = np.flatnonzero(np.any(dc != 0, axis=1))
         dE = Ec[:, rows]
-        hitB = dB.tocoo()
-        np.add.at(points, hitB.row, hitB.data[:, None] * delta[hitB.col])
-        hitE = dE.tocoo()
-        np.add.at(points, hitE.row, hitE.data[:, None] * dc[rows][hitE.col])
+        _scatter_add(points, dB.tocoo(), delta)
+        _scatter_add(points, dE.tocoo(), dc[rows])
 
     def matrix(self) -> sp.csr_matrix:
         """The explicit W = B + E A (P, V) -- for tests and small meshes; it holds many

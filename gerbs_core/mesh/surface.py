@@ -30,10 +30,10 @@ from .evaluate import corner_terms, evaluate, groups
 from .layout import face_layouts
 from .memory import memory_estimate
 from .monomials import monomials
+from .repair import repair_mesh
 from .rings import data_rings
 from .stencil import Stencil
 from .topology import MeshTopology
-from .validation import validate_geometry
 
 __all__ = ["BlendingSurface", "SurfaceModel"]
 
@@ -67,8 +67,9 @@ class SurfaceModel:
     """Everything of a surface that is fixed by the topology, the rest shape and the
     settings (built once; shared by every surface made with :meth:`BlendingSurface.with_positions`).
 
-    degrees (V,) the local functions' degrees; operator (V MMAX, V) their coefficients
-    as a linear map of the positions (:func:`gerbs_core.mesh.agreement.fair_fits`).
+    degrees (V,) the local functions' degrees; fits their coefficients as a linear map of
+    the positions (:class:`gerbs_core.mesh.coupling.CoupledFits`: ``fits(X)``, and the
+    explicit ``operator`` (V MMAX, V), made on first use).
     """
 
     topology: MeshTopology
@@ -76,8 +77,13 @@ class SurfaceModel:
     charts: object
     cover: object
     degrees: np.ndarray
-    operator: object
+    fits: object
     boundary: str
+
+    @property
+    def operator(self):
+        """The coefficients' operator (V MMAX, V) (csr; made on first use)."""
+        return self.fits.operator
 
     @property
     def max_degree(self) -> int:
@@ -106,24 +112,29 @@ class BlendingSurface:
         the control of the smoothness tests.
     memory_budget : bytes a tessellation or stencil may use (ResourceLimitError beyond).
     eps0_resolution : lattice resolution of the cover-thickness check :attr:`eps0`.
+    merge_distance : None (default) or a distance: weld vertices closer than it first.
 
-    Raises InvalidMeshError (topology/geometry) or InvalidParameterError; the
-    caller's arrays are never modified. Immutable.
+    Any mesh is first repaired into an oriented 2-manifold (:mod:`gerbs_core.mesh.repair`:
+    bow-ties, non-manifold edges, loose, degenerate and duplicate elements); the surface
+    is that of the repaired mesh: :attr:`vertices` (V', 3), :attr:`topology`, the output's
+    first V' samples are its vertices, :attr:`vertex_map` / :attr:`face_map` lead back to
+    the input and :attr:`warnings` say what was repaired. Positions passed in
+    (``vertices``, ``rest_positions``, ``normals``, :meth:`with_positions`,
+    ``stencil().apply``) are the input's (V, 3).
+
+    Raises InvalidMeshError (what no surface can come from: NaN, empty, ...) or
+    InvalidParameterError; the caller's arrays are never modified. Immutable.
     """
 
     def __init__(self, vertices, faces, kernel=None, rest_positions=None, boundary: str = "keep",
                  normals=None, *, fairness: FairnessRule | None = None, kappa: float = 0.8,
                  shrink: float = 0.95, exact_gauge: bool = False, memory_budget: float = 2.0e9,
-                 eps0_resolution: int = 6):
+                 eps0_resolution: int = 6, merge_distance: float | None = None):
         X = _points("vertices", vertices)
-        topo = faces if isinstance(faces, MeshTopology) else MeshTopology(faces, len(X))
-        if topo.n_vertices != len(X):
-            raise InvalidParameterError("vertices", f"must have {topo.n_vertices} rows (the "
-                                        f"topology's vertices), got {len(X)}")
-        validate_geometry(X, topo)
-        rest = X if rest_positions is None else _points("rest_positions", rest_positions, len(X))
-        if rest_positions is not None:
-            validate_geometry(rest, topo)
+        rest = None if rest_positions is None else _points("rest_positions", rest_positions, len(X))
+        self.repair = repair_mesh(X, faces, merge_distance=merge_distance, rest_positions=rest)
+        X, topo = np.array(self.repair.vertices), self.repair.topology
+        rest = X if rest is None else np.array(self.repair.rest)
         if kernel is None:
             from ..kernels import ERBS
             kernel = ERBS()
@@ -145,14 +156,15 @@ class BlendingSurface:
         self.eps0_resolution = _positive("eps0_resolution", eps0_resolution, integer=True, lo=1,
                                          closed=True)
         self.kernel = kernel
-        self._normals = None if normals is None else self._unit_normals(normals, len(X))
+        self._normals = None if normals is None else \
+            self._unit_normals(normals, len(self.repair.representative))[self.repair.vertex_map]
         layouts = face_layouts(topo, rest)
         charts = vertex_charts(topo, layouts.corners, layouts.angles, boundary)
         cover = star_cover(topo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge)
         rings = data_rings(topo, charts, layouts.corners)
-        degrees, operator = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
+        degrees, fits = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
         degrees.flags.writeable = False
-        self.model = SurfaceModel(topo, layouts, charts, cover, degrees, operator, boundary)
+        self.model = SurfaceModel(topo, layouts, charts, cover, degrees, fits, boundary)
         self._X = X
         self._X.flags.writeable = False
         self._coef = self._coefficients(X)
@@ -169,7 +181,7 @@ class BlendingSurface:
     def _coefficients(self, X):
         """(V, MMAX, 3) coefficients of the local functions for positions X; with Hermite
         normals the linear part is projected onto the planes orthogonal to them."""
-        C = np.stack([self.model.operator @ X[:, k] for k in range(3)], -1).reshape(-1, MMAX, 3)
+        C = self.model.fits(X).reshape(-1, MMAX, 3)
         if self._normals is not None:
             n = self._normals
             C[:, :2] -= np.einsum("vmk,vk->vm", C[:, :2], n)[..., None] * n[:, None, :]
@@ -200,7 +212,23 @@ class BlendingSurface:
 
     @property
     def vertices(self) -> np.ndarray:
+        """(V', 3) positions of the repaired mesh's vertices (= input[vertex_map])."""
         return self._X.copy()
+
+    @property
+    def vertex_map(self) -> np.ndarray:
+        """(V',) the input vertex of each vertex of the surface (and output vertex sample)."""
+        return self.repair.vertex_map
+
+    @property
+    def face_map(self) -> np.ndarray:
+        """(F',) the input face of each face of :attr:`topology`."""
+        return self.repair.face_map
+
+    @property
+    def warnings(self) -> tuple:
+        """What the repair changed (:class:`gerbs_core.mesh.repair.MeshWarning`, ordered)."""
+        return self.repair.warnings
 
     @property
     def coefficients(self) -> np.ndarray:
@@ -208,10 +236,11 @@ class BlendingSurface:
         return self._coef
 
     def with_positions(self, vertices) -> "BlendingSurface":
-        """The surface of new positions with the same binding (model shared, not copied)."""
+        """The surface of new input positions (V, 3) with the same binding (model shared)."""
         new = object.__new__(BlendingSurface)
         new.__dict__.update({k: v for k, v in self.__dict__.items() if k != "eps0"})
-        new._X = _points("vertices", vertices, len(self._X))
+        new._X = self.repair.positions(_points("vertices", vertices,
+                                               len(self.repair.representative)))
         new._X.flags.writeable = False
         new._coef = new._coefficients(new._X)
         return new
@@ -342,7 +371,7 @@ class BlendingSurface:
         return S, np.array(lat.triangles), nrm
 
     def stencil(self, resolution: int) -> Stencil:
-        """The output points at `resolution` as a linear map of the positions
+        """The output points at `resolution` as a linear map of the input positions X (V, 3)
         (:class:`gerbs_core.mesh.stencil.Stencil`): ``stencil.apply(X) ==
         tessellate(resolution)[0]``. Not available with Hermite normals."""
         if self._normals is not None:
@@ -352,4 +381,5 @@ class BlendingSurface:
         lat = self.lattice(resolution)
         base, mono, eps = assemble(self.model, lat)
         self._require_cover(eps)
-        return Stencil(base, mono, self.model.operator, lat)
+        return Stencil(self.repair.to_input(base), mono,
+                       self.repair.fits_of_input(self.model.fits), lat)

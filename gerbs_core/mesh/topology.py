@@ -4,7 +4,8 @@
 (F,k) int array; triangles, quads, n-gons, mixed; boundaries allowed) and is
 immutable. It validates the mesh as an oriented 2-manifold with boundary and
 raises :class:`~gerbs_core.errors.InvalidMeshError` otherwise (problem tags
-below). :func:`gerbs_core.mesh.validation.validate_geometry` checks vertex
+below). :class:`~gerbs_core.mesh.surface.BlendingSurface` repairs all of them except
+``bad_shape``, ``empty`` and ``index_out_of_range`` first (:mod:`gerbs_core.mesh.repair`). :func:`gerbs_core.mesh.validation.validate_geometry` checks vertex
 positions against a topology.
 
 Conventions (all arrays int64, read-only):
@@ -138,7 +139,21 @@ class MeshTopology:
                     or n_vertices < 0:
                 raise InvalidMeshError("bad_shape", f"bad_shape: n_vertices must be an integer "
                                        f">= 0, got {n_vertices!r}", None, "vertex")
-        sizes, flat = _parse_faces(faces, n_vertices)
+        self._build(*_parse_faces(faces, n_vertices), n_vertices)
+
+    @classmethod
+    def from_csr(cls, sizes, flat, n_vertices: int) -> "MeshTopology":
+        """The topology of faces given as CSR: ``sizes (F,)`` corner counts and ``flat (C,)``
+        vertex of each corner (int64), with the same checks as the constructor (no
+        Python-list round trip; used by :mod:`gerbs_core.mesh.repair`)."""
+        topo = cls.__new__(cls)
+        sizes, flat = np.asarray(sizes, dtype=np.int64), np.asarray(flat, dtype=np.int64)
+        if not len(sizes) or not int(n_vertices):
+            raise InvalidMeshError("empty", "empty: the mesh has no faces", None, "face")
+        topo._build(sizes, flat.copy(), int(n_vertices))
+        return topo
+
+    def _build(self, sizes, flat, n_vertices):
         V = int(flat.max(initial=-1)) + 1 if n_vertices is None else int(n_vertices)
         if n_vertices is None and V <= 0:
             V = 1  # all indices negative: reported as out of range below

@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import InvalidMeshError
 from .topology import MeshTopology, edge_error
 
-__all__ = ["validate_geometry", "OUTLIER_FACTOR"]
+__all__ = ["validate_geometry", "flat_faces", "corner_successors", "check_finite", "OUTLIER_FACTOR"]
 
 # A vertex whose shortest edge is 1e6 median edge lengths away is a stray coordinate,
 # not a feature: at that scale ratio float64 keeps only ~10 digits of the rest of the
@@ -43,10 +43,7 @@ def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12) -> 
     x = x.astype(np.float64)  # a copy
     if x.shape[1] == 2:
         x = np.concatenate([x, np.zeros((len(x), 1))], 1)
-    nf = ~np.isfinite(x).all(axis=1)
-    if nf.any():
-        raise InvalidMeshError("non_finite", "non_finite: NaN or infinite coordinates at vertices",
-                               np.flatnonzero(nf), "vertex")
+    check_finite(x)
     e = topology.edges
     length = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)
     scale = float(np.median(length))
@@ -63,14 +60,47 @@ def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12) -> 
     if short.any():
         raise edge_error("zero_length_edge", f"have length <= {rtol:g} * the median edge length",
                           e[short], topology.edge_faces[short][topology.edge_faces[short] >= 0])
-    fv, nxt, cf = topology.face_vertices, topology.corner_next, topology.corner_face
-    base = x[fv[topology.face_offsets[cf]]]  # relative to the first corner: no cancellation
-    p, q = x[fv] - base, x[fv[nxt]] - base
-    varea = np.zeros((topology.n_faces, 3))
-    np.add.at(varea, cf, np.cross(p, q))  # twice the vector area
-    longest = np.zeros(topology.n_faces)
-    np.maximum.at(longest, cf, length[topology.halfedge_edge])
-    flat = 0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2
+    flat = flat_faces(x, topology.face_sizes, topology.face_vertices, rtol)
     if flat.any():
         raise InvalidMeshError("degenerate_face", "degenerate_face: zero area (collinear "
                                "corners) in faces", np.flatnonzero(flat), "face")
+
+
+def check_finite(x) -> None:
+    """Raise ``non_finite`` naming the vertices of x (V, d) with NaN or infinite coordinates."""
+    nf = ~np.isfinite(x).all(axis=1)
+    if nf.any():
+        raise InvalidMeshError("non_finite", "non_finite: NaN or infinite coordinates at vertices",
+                               np.flatnonzero(nf), "vertex")
+
+
+def corner_successors(sizes) -> np.ndarray:
+    """(C,) the next corner of every corner of CSR faces with corner counts ``sizes`` (F,)."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    offsets = np.zeros(len(sizes) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    nxt = np.arange(1, int(offsets[-1]) + 1, dtype=np.int64)
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    return nxt
+
+
+def flat_faces(x, sizes, flat, rtol: float = 1e-12) -> np.ndarray:
+    """(F,) bool: faces (CSR: corner counts ``sizes`` (F,), vertices ``flat`` (C,)) of zero
+    area, |vector area| <= rtol * (longest edge of the face)**2; positions x (V, 3).
+
+    The vector area sum_k x_k x x_{k+1} / 2 is taken relative to the face's first corner
+    (no cancellation), so it vanishes exactly for collinear corners and for
+    self-cancelling polygons."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    F = len(sizes)
+    cf = np.repeat(np.arange(F), sizes)
+    first = np.zeros(F, dtype=np.int64)
+    np.cumsum(sizes[:-1], out=first[1:])
+    nxt = corner_successors(sizes)
+    base = x[flat[first[cf]]]
+    p, q = x[flat] - base, x[flat[nxt]] - base
+    varea = np.zeros((F, 3))
+    np.add.at(varea, cf, np.cross(p, q))  # twice the vector area
+    longest = np.zeros(F)
+    np.maximum.at(longest, cf, np.linalg.norm(q - p, axis=1))
+    return 0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2

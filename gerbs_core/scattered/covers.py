@@ -12,10 +12,10 @@ It follows the gauge rule of DESIGN section 4 (same as ``gauge.StarGauge``):
 * u~ = 1/rho~ is a GERBS spline in the angle whose local functions are the edges'
   own lines u_e = cos(t - nu_e)/p_e, pulled in by c_e in [kappa, 1] (0.9-0.97
   next to convex corners, as close to 1 as lets their transitions fill the room:
-  :func:`gerbs_core.gauge._envelope_build.adaptive_scales`; 1 between reflex ones),
+  :func:`gerbs_core.gauge.blend.adaptive_scales`; 1 between reflex ones),
   with ONE transition per
   corner, as wide as certified (up to half of each adjacent edge, see
-  ``_subdivide`` and :func:`gerbs_core.gauge._envelope_build.blend_check`), so
+  ``_subdivide`` and :func:`gerbs_core.gauge.blend.blend_check`), so
   kappa rho <= rho~ <= rho; then rho~ is scaled by ``shrink`` = 0.95. (The
   earlier rule -- constants at knots in the log-radius variable -- made rho~ a
   staircase whose derivatives jumped by O(1) within 1e-4 on the unit square.)
@@ -131,7 +131,7 @@ class PlanarStarCover:
     # -- the envelope -----------------------------------------------------
     def _subdivide(self):
         """Corner transitions of the envelope (DESIGN section 4, same rule as
-        :func:`gerbs_core.gauge._envelope_build.build_blend`).
+        :func:`gerbs_core.gauge.blend.build_blend`).
 
         u~ = 1/rho~ is a GERBS spline in the angle whose local functions are the
         edges' own lines u_e = cos(t - nu_e) / p_e pulled in by c_e (kappa <= c_e
@@ -139,27 +139,18 @@ class PlanarStarCover:
         corner over [delta_e - R_e, delta_e] of edge e and [0, L_f] of the next
         edge f: one transition per corner, initially half of each edge (the
         whole edge at an open end), narrowed until
-        :func:`~gerbs_core.gauge._envelope_build.blend_check` certifies
+        :func:`~gerbs_core.gauge.blend.blend_check` certifies
         kappa rho <= rho~/shrink <= rho on it (rigorous bound, not sampling).
         """
-        from ..gauge._envelope_build import (ADAPTIVE_SCALES, adaptive_scales, blend_scales,
-                                      fit_blend_widths)
+        from ..gauge.blend import adaptive_scales, fit_blend_widths
         E = len(self.delta)
         e = np.flatnonzero(self.next_edge >= 0)
         f = self.next_edge[e]
         nA, nB = self.nu[e] - self.delta[e], self.nu[f]
-        tau = nB - nA
-        cvx = np.where(np.abs(tau) <= 1e-12, None, tau > 0).astype(object)
-        cstart = np.full(E, None, dtype=object)
-        cend = np.full(E, None, dtype=object)
-        cstart[f], cend[e] = cvx, cvx
         roomA = self.delta[e] * np.where(self.prev_edge[e] >= 0, 0.5, 1.0)
         roomB = self.delta[f] * np.where(self.next_edge[f] >= 0, 0.5, 1.0)
-        if ADAPTIVE_SCALES:
-            self.c = adaptive_scales(E, e, f, nA, self.p[e], nB, self.p[f], roomA, roomB,
-                                     self.kappa, self.kernel)
-        else:
-            self.c = blend_scales(cstart, cend, self.kappa)
+        self.c = adaptive_scales(E, e, f, nA, self.p[e], nB, self.p[f], roomA, roomB,
+                                 self.kappa, self.kernel)
         wa, wb, ok, _, _ = fit_blend_widths(nA, self.p[e], self.c[e], nB, self.p[f], self.c[f],
                                             roomA, roomB, self.kappa, self.kernel)
         if not ok.all():

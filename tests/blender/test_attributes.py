@@ -330,3 +330,64 @@ def test_quads_in_give_quads_out_like_subdivision_surface(blender):
     offsets, _ = evaluated_faces(obj)
     assert set(gerbs.tolist()) == set(np.diff(offsets).tolist()) == {4}
     assert len(gerbs) == 9 * len(obj.data.polygons)
+
+
+def test_a_repaired_mesh_carries_its_attributes_through_the_repair_maps(blender):
+    """An icosphere with a loose vertex in the middle of the numbering (left out: every
+    later vertex shifts), one flipped face (reoriented: its corners reversed) and a
+    duplicate face early on (dropped: every later face shifts): every
+    output face says which input face it lies in (a face attribute), every corner of
+    every input face has an output corner at its vertex with its UV, and the vertex
+    samples keep their own vertices' weights."""
+    from blender_addon import api
+
+    from .helpers import link_object
+
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1)
+    ico = bpy.context.active_object
+    X0 = positions(ico.data)
+    faces = [list(p.vertices) for p in ico.data.polygons]
+    bpy.data.objects.remove(ico)
+    X = np.insert(X0, 3, [5.0, 5.0, 5.0], axis=0)  # loose vertex 3
+    faces = [[v + (v >= 3) for v in f] for f in faces]
+    faces[0] = faces[0][::-1]  # flipped
+    faces.insert(1, faces[5][1:] + faces[5][:1])  # a duplicate: one of faces 1 and 6 dropped
+    obj = link_object("repaired", X, faces)
+    mesh = obj.data
+    _face_ids(obj)
+    uv = mesh.uv_layers.new(name="UV")
+    rng = np.random.default_rng(3)
+    uvs = rng.random((len(mesh.loops), 2)).astype(np.float32)
+    uv.data.foreach_set("uv", uvs.ravel())
+    group = obj.vertex_groups.new(name="W")
+    w = rng.random(len(X))
+    for v in range(len(X)):
+        group.add([v], float(w[v]), "REPLACE")
+    mesh.update()
+    r = 2
+    api.add_surface(obj, resolution=r)
+    status = api.status(obj)
+    assert status["error"] == "" and "unused_vertex" in status["warning"]
+    assert "inconsistent_orientation" in status["warning"]
+    out = _final(obj)
+    P, cv = positions(out), _corner_vertices(out)
+    face = _attr(out, "face_id")[:, 0]
+    counts = np.bincount(face, minlength=len(faces))
+    dropped = np.flatnonzero(counts == 0)
+    assert len(dropped) == 1 and dropped[0] in (1, 6) and set(counts[counts > 0]) == {r * r}
+    assert "duplicate_face" in status["warning"]
+    out_uv = _attr(out, "UV")
+    offsets, _ = evaluated_faces(obj)
+    owner = np.repeat(face, np.diff(offsets))  # the input face of each output corner
+    base_cv = _corner_vertices(mesh)
+    starts = [p.loop_start for p in mesh.polygons]
+    for f, start in enumerate(starts):
+        if f == dropped[0]:
+            continue
+        for c in range(start, start + 3):
+            here = (owner == f) & (np.abs(P[cv] - X[base_cv[c]]).max(axis=1) <= 1e-6)
+            assert here.any() and np.abs(out_uv[here] - uvs[c]).max() <= 1e-6
+    keep = np.delete(np.arange(len(X)), 3)  # the vertex samples: the used vertices in order
+    assert np.abs(P[:len(keep)] - X[keep]).max() <= 1e-6
+    got = np.array([out.vertices[i].groups[0].weight for i in range(len(keep))])
+    assert np.abs(got - w[keep]).max() <= 1e-6

@@ -200,7 +200,7 @@ def test_merge_distance_welds_only_when_asked(blender, tmp_path):
     assert counts[("--merge-distance", "0")] == _suzanne_surface_count(2) < counts[()]
 
 
-NON_MANIFOLD = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n"
+NO_FACES = "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n"  # edges only: no surface
 
 
 @pytest.mark.parametrize("case,words", [
@@ -216,7 +216,7 @@ NON_MANIFOLD = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\n
     ("--resolution 0", ["--resolution", "[1, 64]"]), ("--bfbs-left 99", ["--bfbs-left", "[0, 16]"]),
     ("--resolution x", ["invalid int value"]), ("--alpha nan", ["--alpha", "finite"]),
     ("--memory-budget 0", ["--memory-budget"]), ("--merge-distance -1", ["--merge-distance"]),
-    ("--kernel gauss", ["--kernel"]), ("non-manifold", ["non_manifold_edge"]),
+    ("--kernel gauss", ["--kernel"]), ("no faces", ["empty"]),
     ("too large", ["memory"]),
 ])
 def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, case, words):
@@ -245,8 +245,8 @@ def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, 
         args[2] = tmp_path / "o.ply"
     elif case.startswith("--"):
         args += case.split()
-    elif case == "non-manifold":
-        good.write_text(NON_MANIFOLD)
+    elif case == "no faces":
+        good.write_text(NO_FACES)
     elif case == "too large":
         args += ["--resolution", "64", "--memory-budget", "1"]
     out = cli(*args, cwd=tmp_path)

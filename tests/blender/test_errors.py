@@ -1,4 +1,5 @@
-"""Invalid meshes: a clear error naming problem and indices; the base mesh untouched."""
+"""Invalid meshes: a clear error naming problem and indices; the base mesh untouched.
+Messy meshes (issue 14): built, with a warning line in the modifier panel."""
 import bpy
 import numpy as np
 import pytest
@@ -10,13 +11,16 @@ pytestmark = pytest.mark.blender
 NON_MANIFOLD = ([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1)],
                 [(0, 1, 2), (1, 0, 3), (0, 1, 4)])  # edge (0, 1) in three faces
 LOOSE_VERTEX = ([(0, 0, 0), (1, 0, 0), (0, 1, 0), (5, 5, 5)], [(0, 1, 2)])
-DEGENERATE = ([(0, 0, 0), (1, 0, 0), (2, 0, 0), (0, 1, 0)], [(0, 1, 2), (0, 2, 3)])
+# what no surface can come from: NaN, no faces, nothing but a zero-area face
+NAN = ([(0, 0, 0), (float("nan"), 0, 0), (0, 1, 0)], [(0, 1, 2)])
+DEGENERATE = ([(0, 0, 0), (1, 0, 0), (2, 0, 0)], [(0, 1, 2)])
+NO_FACES = ([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [])
 
 
 @pytest.mark.parametrize("mesh,problem,index", [
-    (NON_MANIFOLD, "non_manifold_edge", None),
-    (LOOSE_VERTEX, "unused_vertex", 3),
-    (DEGENERATE, "degenerate", 0),
+    (NAN, "non_finite", 1),
+    (DEGENERATE, "empty", None),
+    (NO_FACES, "empty", None),
 ])
 def test_invalid_mesh_reports_and_leaves_base_untouched(blender, mesh, problem, index):
     from blender_addon import api
@@ -32,27 +36,60 @@ def test_invalid_mesh_reports_and_leaves_base_untouched(blender, mesh, problem, 
     P = evaluated(obj)
     (warning,) = obj.modifiers[0].node_warnings  # shown in the modifier panel
     assert problem in warning.message and warning.type == "ERROR"
-    assert np.array_equal(P, X)  # modifier passes the base mesh through
-    assert np.array_equal(positions(obj.data), X)
+    assert np.array_equal(P, X, equal_nan=True)  # modifier passes the base mesh through
+    assert np.array_equal(positions(obj.data), X, equal_nan=True)
     o2, c2 = topology(obj.data)
     assert np.array_equal(o2, offsets) and np.array_equal(c2, corners)
 
 
 def test_operator_reports_error_in_background(blender):
-    obj = link_object("bad", *NON_MANIFOLD)
+    obj = link_object("bad", *NAN)
     X = positions(obj.data)
-    with pytest.raises(RuntimeError, match="non_manifold_edge"):  # ERROR report raises headless
+    with pytest.raises(RuntimeError, match="non_finite"):  # ERROR report raises headless
         bpy.ops.object.gerbs_add_surface(resolution=2)
-    assert np.array_equal(positions(obj.data), X)
+    assert np.array_equal(positions(obj.data), X, equal_nan=True)
 
 
-def test_error_clears_when_mesh_is_fixed_live(blender):
+def test_messy_mesh_builds_with_a_warning_line_and_materials_follow_their_faces(blender):
+    """A fin (non-manifold edge), a loose vertex and a zero-area face in front: the
+    surface is built, the modifier panel shows one warning line naming the repairs,
+    api.status carries the records, and every output triangle has the material of the
+    input face it lies in (the dropped face shifts the faces' numbering)."""
     from blender_addon import api
-    from blender_addon.api import GERBSSyncError
+
+    verts = NON_MANIFOLD[0] + [(5, 5, 5), (2, 0, 0)]
+    faces = [(0, 1, 6)] + NON_MANIFOLD[1]  # (0, 1, 6) is collinear, on a boundary: dropped
+    obj = link_object("messy", verts, faces)
+    for name in ("a", "b"):
+        obj.data.materials.append(bpy.data.materials.new(name))
+    obj.data.polygons.foreach_set("material_index", [0, 1, 0, 1])
+    X = positions(obj.data)
+    api.add_surface(obj, resolution=2)
+    P = evaluated(obj)
+    info = api.status(obj)
+    assert info["error"] == ""
+    assert [w.tag for w in info["warnings"]] == ["degenerate_face", "non_manifold_edge",
+                                                  "non_manifold_vertex", "unused_vertex"]
+    ((kind, message),) = [(w.type, w.message) for w in obj.modifiers[0].node_warnings]
+    assert kind == "WARNING" and message == info["warning"]
+    for words in ("degenerate_face (1 face [0])", "non_manifold_edge (2 vertices [0, 1])",
+                  "unused_vertex (2 vertices [5, 6])"):
+        assert words in message
+    assert len(P) > len(X) and np.all(np.isfinite(P))
+    assert np.array_equal(positions(obj.data), X)  # the base mesh untouched
+    mesh = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
+    got = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("material_index", got)
+    assert got.tolist() == [1] * 4 + [0] * 4 + [1] * 4  # input faces 1, 2, 3 at r = 2
+
+
+def test_warning_clears_when_mesh_is_fixed_live(blender):
+    from blender_addon import api
 
     obj = link_object("bad", *LOOSE_VERTEX)
-    with pytest.raises(GERBSSyncError):
-        api.add_surface(obj, resolution=2)
+    api.add_surface(obj, resolution=2)
+    assert "unused_vertex (1 vertex [3])" in api.status(obj)["warning"]
+    assert [w.type for w in obj.modifiers[0].node_warnings] == ["WARNING"]
     obj.data.vertices[3].select = True
     import bmesh
     bm = bmesh.new()
@@ -63,7 +100,7 @@ def test_error_clears_when_mesh_is_fixed_live(blender):
     bm.free()
     obj.data.update()
     P = evaluated(obj)
-    assert len(P) == 6 and api.status(obj)["error"] == ""
+    assert len(P) == 6 and api.status(obj)["error"] == "" and api.status(obj)["warning"] == ""
     assert not obj.modifiers[0].node_warnings
 
 

@@ -84,3 +84,28 @@ def test_a_problem_made_above_gerbs_is_not_selected_on_the_base_mesh(blender):
     assert "modifiers above GERBS" in " ".join(rows["error"])
     assert not bpy.ops.object.gerbs_select_problem.poll()
     assert np.isfinite(np.array([v.co for v in obj.data.vertices])).all()
+
+
+def test_the_warning_line_selects_what_the_repair_changed(blender):
+    """A loose vertex (left out by the repair): the panel's warning line names it, wrapped
+    to the panel, and the operator selects exactly that vertex."""
+    from blender_addon import api, panels
+
+    from .helpers import link_object
+
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1)
+    ico = bpy.context.active_object
+    X = np.array([v.co[:] for v in ico.evaluated_get(
+        bpy.context.evaluated_depsgraph_get()).data.vertices])
+    faces = [[v + (v >= 3) for v in p.vertices] for p in ico.data.polygons]
+    bpy.data.objects.remove(ico)
+    obj = link_object("loose", np.insert(X, 3, [4.0, 0.0, 0.0], axis=0), faces)
+    mod = api.add_surface(obj, resolution=2)
+    rows = panels.panel_rows(obj, mod, width_px=220.0)
+    assert not rows["error"] and rows["warning"] and rows["select"]
+    assert "unused_vertex" in " ".join(rows["warning"])
+    assert all(len(line) <= max(20, int(220.0 / 7.0) - 4) for line in rows["warning"])
+    bpy.ops.object.gerbs_select_problem()
+    bm = bmesh.from_edit_mesh(obj.data)
+    assert [v.index for v in bm.verts if v.select] == [3]
+    bpy.ops.object.mode_set(mode="OBJECT")

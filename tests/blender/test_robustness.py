@@ -11,8 +11,8 @@ from .helpers import evaluated, link_object, make_object, positions, topology
 
 pytestmark = pytest.mark.blender
 
-NON_MANIFOLD = ([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1)],
-                [(0, 1, 2), (1, 0, 3), (0, 1, 4)])  # edge (0, 1) in three faces
+NAN = ([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, -1, 0), (float("nan"), 0, 1)],
+       [(0, 1, 2), (1, 0, 3), (0, 1, 4)])  # no surface through a NaN vertex
 
 
 def _snapshot(obj):
@@ -34,23 +34,23 @@ def test_invalid_mesh_error_shows_in_panel_and_status_bar(blender):
     from blender_addon import api, handlers
     from blender_addon.api import GERBSSyncError
 
-    obj = link_object("bad", *NON_MANIFOLD)
+    obj = link_object("bad", *NAN)
     snap = _snapshot(obj)
-    with pytest.raises(GERBSSyncError, match="non_manifold_edge"):
+    with pytest.raises(GERBSSyncError, match="non_finite"):
         api.add_surface(obj, resolution=2)
     P = evaluated(obj)  # the depsgraph handler runs: status bar updated
-    assert np.array_equal(P, snap[0]) and _same_base(obj, snap)
+    assert np.array_equal(P, snap[0], equal_nan=True)
     ((kind, message),) = _warnings(obj)  # the modifier panel's error line
-    assert kind == "ERROR" and "non_manifold_edge" in message
-    assert "non_manifold_edge" in api.status(obj)["error"]  # the GERBS status panel
-    assert handlers.status_message is not None and "non_manifold_edge" in handlers.status_message
+    assert kind == "ERROR" and "non_finite" in message
+    assert "non_finite" in api.status(obj)["error"]  # the GERBS status panel
+    assert handlers.status_message is not None and "non_finite" in handlers.status_message
     assert obj.name in handlers.status_message
     import blender_addon
     blender_addon.unregister()  # the add-on's message leaves the status bar with it
     assert handlers.status_message is None
     blender_addon.register()
     evaluated(obj)  # still invalid: shown again
-    assert "non_manifold_edge" in handlers.status_message
+    assert "non_finite" in handlers.status_message
 
 
 def _add_fin(mesh):
@@ -68,8 +68,9 @@ def _add_fin(mesh):
 
 
 def test_live_edit_that_breaks_the_mesh_then_fixes_it(blender):
-    """A live edit making the mesh non-manifold: error in the panel and the status bar,
-    the (edited) base mesh shown as is; undoing the edit restores the surface."""
+    """A live edit adding a fin (a non-manifold edge): repaired, a warning line in the
+    panel; then one moving a vertex to NaN: error in the panel and the status bar, the
+    (edited) base mesh shown as is; undoing the edits restores the surface."""
     from blender_addon import api, handlers
 
     obj = make_object("grid")
@@ -81,10 +82,20 @@ def test_live_edit_that_breaks_the_mesh_then_fixes_it(blender):
     _add_fin(obj.data)
     bpy.ops.ed.undo_push(message="fin")
     P = evaluated(obj)
-    assert np.array_equal(P, positions(obj.data))  # passed through, nothing written into it
+    assert len(P) > len(good) and handlers.status_message is None  # built with the fin
     ((kind, message),) = _warnings(obj)
-    assert kind == "ERROR" and "non_manifold_edge" in message
-    assert "non_manifold_edge" in handlers.status_message and name in handlers.status_message
+    assert kind == "WARNING" and "non_manifold_edge" in message
+    _undo()
+    obj = bpy.data.objects[name]
+    assert np.abs(evaluated(obj) - good).max() <= 1e-6
+    obj.data.vertices[0].co = (float("nan"), 0.0, 0.0)
+    obj.data.update()
+    bpy.ops.ed.undo_push(message="nan")
+    P = evaluated(obj)
+    assert np.array_equal(P, positions(obj.data), equal_nan=True)  # passed through
+    ((kind, message),) = _warnings(obj)
+    assert kind == "ERROR" and "non_finite" in message
+    assert "non_finite" in handlers.status_message and name in handlers.status_message
     _undo()
     obj = bpy.data.objects[name]
     assert np.abs(evaluated(obj) - good).max() <= 1e-6

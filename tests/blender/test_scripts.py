@@ -58,12 +58,26 @@ def test_main_job_obj_output_is_the_surface(blender, tmp_path):
 
 def test_main_job_invalid_mesh_exits_nonzero_without_output(tmp_path):
     bad = tmp_path / "bad.obj"
-    bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\n"
-                   "f 1 2 3\nf 2 1 4\nf 1 2 5\n")  # edge 1-2 shared by three faces
+    bad.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n")  # edges only: no surface
     out = run([ROOT / "scripts" / "gerbs_surface.py", bad, "-o", tmp_path / "o.glb"], cwd=tmp_path)
     assert out.returncode == 2
-    assert "non_manifold_edge" in out.stderr and "error:" in out.stderr
+    assert "empty" in out.stderr and "error:" in out.stderr
     assert not (tmp_path / "o.glb").exists()
+
+
+def test_main_job_messy_mesh_prints_warnings_and_exits_zero(tmp_path):
+    messy = tmp_path / "messy.obj"
+    messy.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\nv -1 0 0\n"
+                     "f 1 2 3\nf 2 1 4\nf 1 2 5\n"  # edge 1-2 shared by three faces
+                     "f 1 6 7\n")  # ... and a fan meeting the others at vertex 1 only
+    out = run([ROOT / "scripts" / "gerbs_surface.py", messy, "-o", tmp_path / "o.obj",
+               "--resolution", "2"], cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    lines = [x for x in out.stderr.splitlines() if x.startswith("warning:")]
+    assert len(lines) == 2, out.stderr
+    assert "non_manifold_edge" in lines[0] and "edges (0, 1)" in lines[0]
+    assert "non_manifold_vertex" in lines[1] and "vertex indices [0, 1]" in lines[1]
+    assert (tmp_path / "o.obj").is_file()
 
 
 def test_extension_zip_validates_and_installs(tmp_path):

@@ -407,7 +407,7 @@ def test_transition_width_certificates_hold_densely(kern):
     points per transition for random corners, nearly radial edges included,
     for symmetric and asymmetric kernels (lam != 1/2: F(1 - w) != 1 - F(w), so
     side B needs the mirrored profile)."""
-    from gerbs_core.gauge._envelope_build import blend_check, closed_form_fit, fit_blend_widths
+    from gerbs_core.gauge.blend import blend_check, closed_form_fit, fit_blend_widths
     rng = np.random.default_rng(4)
     n = 400
     nA = rng.uniform(-1.55, 1.2, n)
@@ -415,7 +415,7 @@ def test_transition_width_certificates_hold_densely(kern):
     nB = np.clip(nB, -1.55, 1.55)
     pA = rng.uniform(0.2, 1.0, n)
     pB = pA * np.cos(nB) / np.cos(nA)          # the two edges meet on the corner ray
-    # pulled-in lines as blend_scales chooses them: c < 1 beside a convex corner
+    # pulled-in lines as the scale rule chooses them: c < 1 beside a convex corner
     # (room for the outward bulge), c > kappa beside a reflex one
     convex = nB > nA
     cA = np.where(convex, rng.choice([0.8, 0.9, 0.95], n), rng.choice([0.9, 0.95, 1.0], n))

@@ -84,6 +84,39 @@ def test_locality_exact(name):
         assert np.abs(pts - s.with_positions(Y).tessellate(r)[0]).max() <= 1e-12
 
 
+@pytest.mark.parametrize("name", ["icosphere", "mixed_bent", "grid30", "tri30"])
+def test_partial_updates_take_single_columns_of_the_coefficient_map(name, monkeypatch):
+    # apply_moved needs only the moved vertices' columns (CoupledFits.columns), so it
+    # never makes the whole operator; the columns equal the operator's to round-off.
+    # On the 30 x 30 grids they are computed on a neighbourhood (coupling_local), which
+    # is checked to be a small part of the mesh; with one hop less it would be wrong.
+    from gerbs_core.mesh import coupling
+    from gerbs_core.mesh.coupling_local import neighbourhood
+    V, F = (P.grid(30, 30, kind="tri" if name == "tri30" else "quad") if name.endswith("30")
+            else MESHES[name]())
+    st = BlendingSurface(V, F).stencil(3)
+    if name.endswith("30"):
+        assert len(neighbourhood(st.fits._graph, [1, 4], coupling.LOCAL_REACH)) < len(V) // 2
+    pts = st.apply(V)
+    moved = np.array([1, 4])
+    delta = np.array([[0.02, 0.0, -0.01], [0.0, 0.03, 0.01]])
+    st.apply_moved(pts, moved, delta)
+    assert not st.fits.operator_built
+    Y = V.copy()
+    Y[moved] += delta
+    assert np.abs(pts - st.apply(Y)).max() <= 1e-13
+    cols = st.fits.columns(moved).toarray()
+    op = st.operator[:, moved].toarray()
+    assert np.abs(cols - op).max() <= 1e-10 * max(np.abs(op).max(), 1.0)
+    assert np.array_equal(cols != 0, op != 0) or np.abs(cols[op == 0]).max() <= 1e-12
+    if name.endswith("30"):  # the control: a neighbourhood two hops short misses entries
+        monkeypatch.setattr(coupling, "LOCAL_REACH", coupling.LOCAL_REACH - 2)
+        st.fits._last = None
+        st.fits.__dict__.pop("operator")
+        short = st.fits.columns(moved).toarray()
+        assert np.abs(short - op).max() > 1e-6 * np.abs(op).max()  # 1e-10 when right
+
+
 def test_support_is_a_few_rings():
     # a coefficient depends on the data rings (2) plus one ring per coupling sweep (2);
     # a sample on the corners of its face: moving w reaches the faces within 5 rings

@@ -1,0 +1,217 @@
+"""The coupled fits (step 2 of the fair-shape rule, :mod:`gerbs_core.mesh.agreement`) as a
+linear map of the positions.
+
+Starting from the chosen data fits c_0 = C X, every sweep solves, vertex by vertex with
+its neighbours' current coefficients frozen (damped block Jacobi),
+
+    (N_data + mu B^T W_a B + lam B^T W_t B) c_v = r_data + r_tension + r_agreement(c),
+
+on the energies' sample-corner rows (sample p, vertex v, weight w, Psi = P):
+
+    r_tension   = B^T [w_t (cage(p) - X_v)],                      w_t = lam w s P,
+    r_agreement = B^T [mu w P (T(p) - P l_v(p)) - w_a X_v],        w_a = mu w P (1 - P),
+
+with l_v(p) = X_v + B_v(p) . c_v and T(p) = sum over the sample's corners of P l. Every
+step is a product with a sparse matrix fixed by the rest shape, so the coefficients are
+linear in X: :class:`CoupledFits` applies the map to positions (a few sparse products
+with k = 3 columns: what a build needs) and makes the explicit operator (V MMAX, V) only
+when asked (:attr:`CoupledFits.operator`: stencil updates and locality tests), by
+applying the SAME map to the identity.
+"""
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+
+from .coupling_local import local_parts, neighbourhood, vertex_graph
+from .fits import pinned_normal_inverse
+from .monomials import monomial_exponents, n_monomials
+
+__all__ = ["CoupledFits", "coupled_fits", "identity_fits", "LOCAL_REACH"]
+
+# hops in the data-fit graph (each up to 2 rings) around moved vertices within which a
+# column of the map and all its intermediates lie, with a margin: data fit 1 hop, each
+# of the (2) sweeps at most 1 more, the margin 1 (tested against the operator)
+LOCAL_REACH = 4
+
+
+class CoupledFits:
+    """Coefficients of the local functions as a fixed linear map of the positions.
+
+    ``fits(X)`` -> (V MMAX, k) for positions X (V, k) (rows v MMAX + m, unscaled chart
+    coordinates); :attr:`operator` the same map as a csr matrix (V MMAX, V), built on
+    first use, whose rows sum to 0 exactly (translations move every local function
+    rigidly). Immutable.
+    """
+
+    def __init__(self, chosen, sweeps=0, damping=1.0, parts=None):
+        self.chosen = chosen.tocsr()
+        self.sweeps = int(sweeps) if parts is not None else 0
+        self.damping = float(damping)
+        self._parts = parts
+        self.shape = self.chosen.shape
+        self._last = None     # (key, columns): memo of the last columns() request
+
+    def __call__(self, X):
+        """Coefficients (V MMAX, k) for positions X (V, k) or (V,)."""
+        return self._map(np.asarray(X, dtype=np.float64))
+
+    def _map(self, Y):
+        """The map applied to Y: a dense (V, k) array, or a sparse (V, V) matrix."""
+        return _apply(self.chosen, self._parts, self.sweeps, self.damping, Y)
+
+    @cached_property
+    def operator(self) -> sp.csr_matrix:
+        """The explicit operator (V MMAX, V) (csr; rows summing to 0 exactly)."""
+        n = self.shape[0]
+        op = sp.csr_matrix(self._map(sp.identity(self.shape[1], format="csr")))
+        # constants have zero coefficients (the pin carries them): make every row sum to 0
+        # exactly, whatever the round-off of ill-conditioned fits (it would show as W @ 1 != 1)
+        rows = np.arange(n)
+        mmax = n // self.shape[1]
+        op = op - sp.csr_matrix((np.asarray(op.sum(axis=1)).ravel(), (rows, rows // mmax)),
+                                shape=op.shape)
+        op.sum_duplicates()
+        op.eliminate_zeros()
+        return op
+
+    def columns(self, cols) -> sp.csc_matrix:
+        """Columns ``cols`` (m,) of :attr:`operator` as a csc (V MMAX, m), without making
+        the operator: the map applied to those unit vectors on a neighbourhood of them
+        (:mod:`gerbs_core.mesh.coupling_local`: cost ~ the neighbourhood, not the mesh),
+        with the same row-sum correction (to round-off). The last request is memoized
+        (a drag moves the same vertices frame after frame)."""
+        cols = np.asarray(cols, dtype=np.int64).ravel()
+        key = cols.tobytes()
+        if self._last is not None and self._last[0] == key:
+            return self._last[1]
+        if self.operator_built:
+            out = self.operator.tocsc()[:, cols]
+        else:
+            out = self._columns(cols)
+        self._last = (key, out)
+        return out
+
+    def _columns(self, cols):
+        V, m = self.shape[1], len(cols)
+        mmax = self.shape[0] // V
+        verts = (neighbourhood(self._graph, cols, LOCAL_REACH) if self.sweeps
+                 else np.arange(V))
+        if len(verts) > V // 2:                       # most of the mesh: the map itself
+            chosen, parts, R, verts = self.chosen, self._parts, np.arange(V * mmax), np.arange(V)
+        else:
+            chosen, parts, R = local_parts(self.chosen, self._parts, verts, mmax,
+                                           self._owner)
+        at = np.searchsorted(verts, cols)
+        unit = sp.csr_matrix((np.ones(m), (at, np.arange(m))), shape=(len(verts), m))
+        local = sp.csr_matrix(_apply(chosen, parts, self.sweeps, self.damping, unit))
+        # minus the row sums of the moved vertices' own rows, in their columns: the same
+        # correction as the operator's (these rows' supports lie inside the neighbourhood)
+        sums = _apply(chosen, parts, self.sweeps, self.damping, np.ones((len(verts), 1)))[:, 0]
+        own = np.flatnonzero(np.isin(R // mmax, cols))
+        where = np.argsort(cols)[np.searchsorted(np.sort(cols), R[own] // mmax)]
+        local = local - sp.csr_matrix((sums[own], (own, where)), shape=local.shape)
+        lc = local.tocoo()
+        out = sp.csc_matrix((lc.data, (R[lc.row], lc.col)), shape=(self.shape[0], m))
+        out.eliminate_zeros()
+        return out
+
+    @cached_property
+    def _graph(self):
+        return vertex_graph(self.chosen, self.shape[1])
+
+    @cached_property
+    def _owner(self):
+        """Per vertex its sample-corner rows (csc of the rows' vertex incidence)."""
+        return self._parts["rows"].tocsc()
+
+    @property
+    def operator_built(self) -> bool:
+        return "operator" in self.__dict__
+
+
+def _apply(chosen, p, sweeps, d, Y):
+    """The map (module docstring) with matrices ``chosen``, ``p`` applied to Y."""
+    c = chosen @ Y
+    if not sweeps:
+        return c
+    Xs = p["rows"] @ Y                                   # X_v of every row
+    fixed = p["rhs"] @ Y + p["BsT"] @ (p["Wt"] @ (p["cage"] @ Y - Xs) - p["Wa"] @ Xs)
+    for _ in range(sweeps):
+        l = Xs + p["Bu"] @ c                              # l_v at the rows' samples
+        T = p["gather"] @ (p["agg"] @ l)                  # sum of the sample's P l
+        new = p["blk"] @ (fixed + p["BsT"] @ (p["Dp"] @ T - p["Dpp"] @ l))
+        c = (1.0 - d) * c + d * new
+        if sp.issparse(c):
+            c.eliminate_zeros()
+    return c
+
+
+def identity_fits(chosen) -> CoupledFits:
+    """The chosen data fits alone (no coupling sweeps)."""
+    return CoupledFits(chosen)
+
+
+def _block_diagonal(blocks):
+    """csr of the block-diagonal matrix with (V, M, M) blocks (zero entries dropped)."""
+    V, M, _ = blocks.shape
+    r = (np.arange(V)[:, None, None] * M + np.arange(M)[None, :, None]).repeat(M, 2)
+    c = (np.arange(V)[:, None, None] * M + np.arange(M)[None, None, :]).repeat(M, 1)
+    nz = blocks != 0
+    return sp.csr_matrix((blocks[nz], (r[nz], c[nz])), shape=(V * M, V * M))
+
+
+def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax) -> CoupledFits:
+    """The coupled fits (module docstring).
+
+    chosen, rhs (V MMAX, V): the chosen candidates' coefficient operators and the
+    right-hand sides of their scaled normal equations; normals (V, MMAX, MMAX) their
+    normal matrices (scaled coordinates, zero-padded); degrees (V,); smp the energies'
+    samples (:class:`gerbs_core.mesh.agreement._Samples`); rule the FairnessRule; h (V,)
+    the fit scales; dmax the padded layout's degree (MMAX = n_monomials(dmax)).
+    """
+    V = len(degrees)
+    mmax = n_monomials(dmax)
+    deg = monomial_exponents(dmax).sum(1)
+    SC, L = len(smp.vertex), smp.n_samples
+    P, w, s = smp.psi, smp.weight, smp.sharp
+    wa = rule.mu * w * P * (1.0 - P)                  # agreement weight of each row
+    wt = rule.lam * w * s * P                         # tension weight
+    # the rows' monomials, only those of each vertex's own degree (the others have zero
+    # coefficients): Bu (SC, V MMAX) csr and the scaled Bs^T (V MMAX, SC) csc, built
+    # directly in compressed form (no coo sort: these are the largest matrices)
+    active = (np.arange(mmax)[None, :]
+              < np.array([n_monomials(d) for d in degrees])[smp.vertex][:, None])
+    cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active]
+    ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))])
+    Bu = sp.csr_matrix((smp.Bu[active], cols, ptr), shape=(SC, V * mmax))
+    BsT = sp.csc_matrix((smp.Bs[active], cols, ptr), shape=(V * mmax, SC))
+    # per vertex normal matrices of data + agreement + tension (block diagonal B^T W B)
+    N = normals.copy()
+    G2 = (BsT @ sp.diags(wa + wt) @ BsT.T).tocoo()
+    N[G2.row // mmax, G2.row % mmax, G2.col % mmax] += G2.data
+    Pinv = np.zeros_like(N)
+    for d in np.unique(degrees).tolist():
+        vs = np.flatnonzero(degrees == d)
+        M = n_monomials(d)
+        Pinv[vs, :M, :M] = pinned_normal_inverse(N[vs, :M, :M], d)
+    Pinv = Pinv / h[:, None, None] ** deg[None, :, None]      # unscale: c = scaled / h^|m|
+    one = np.arange(SC + 1)
+    gather = sp.csr_matrix((np.ones(SC), smp.sample, one), shape=(SC, L))
+    parts = {
+        "blk": _block_diagonal(Pinv),
+        "rhs": rhs.tocsr(),
+        "BsT": BsT,
+        "rows": sp.csr_matrix((np.ones(SC), smp.vertex, one), shape=(SC, V)),
+        "cage": (gather @ smp.cage).tocsr(),
+        "Bu": Bu,
+        "gather": gather,
+        "agg": sp.csc_matrix((P, smp.sample, one), shape=(L, SC)),
+        "Wt": sp.diags(wt, format="csr"),
+        "Wa": sp.diags(wa, format="csr"),
+        "Dp": sp.diags(rule.mu * w * P, format="csr"),
+        "Dpp": sp.diags(rule.mu * w * P * P, format="csr"),
+    }
+    return CoupledFits(chosen, rule.sweeps, rule.damping, parts)
