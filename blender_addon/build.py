@@ -23,20 +23,14 @@ from .transfer import Transfer
 
 class _LazyValues:
     """The surface's linear map of vertex values when the points themselves are not one
-    (Hermite normals): assembled from its partition and fits on first use."""
+    (Hermite normals): ``BlendingSurface.value_stencil``, made on first use."""
 
     def __init__(self, surface, lattice):
         self.surface, self.lattice, self._stencil = surface, lattice, None
 
     def apply(self, values):
         if self._stencil is None:
-            from gerbs_core.mesh.assembly import assemble
-            from gerbs_core.mesh.stencil import Stencil
-
-            repair = self.surface.repair
-            base, mono, _ = assemble(self.surface.model, self.lattice)
-            self._stencil = Stencil(repair.to_input(base), mono,
-                                    repair.fits_of_input(self.surface.model.fits), self.lattice)
+            self._stencil = self.surface.value_stencil(self.lattice.resolution)
         return self._stencil.apply(values)
 
 
@@ -49,15 +43,18 @@ class Built:
     surface: object  # the BlendingSurface (its repair maps output elements to the input's)
 
 
-def build_surface(settings: dict, inp, resolution: int, progress) -> Built:
-    """The surface of `inp` with `settings` at `resolution` (raises GERBSError)."""
+def build_surface(settings: dict, inp, resolution: int, progress, creases=None) -> Built:
+    """The surface of `inp` with `settings` at `resolution` (raises GERBSError);
+    `creases`: :class:`blender_addon.creases.Creases` (None: none)."""
     from gerbs_core.mesh.surface import BlendingSurface
 
     args = settings_mod.core_arguments(settings)
     X = inp.positions.astype(np.float64)
     normals = None if inp.normals is None else inp.normals.astype(np.float64)
     progress(0.05, "building surface")
-    surface = BlendingSurface(X, inp.faces(), kernel=args.kernel, normals=normals, **args.surface)
+    crease_args = creases.core_arguments() if creases is not None else {}
+    surface = BlendingSurface(X, inp.faces(), kernel=args.kernel, normals=normals,
+                              **args.surface, **crease_args)  # creases: creases.py
     if normals is not None:  # Hermite normals: not W @ X (the core refuses a stencil)
         progress(0.35, "evaluating surface")
         P = surface.tessellate(resolution)[0]

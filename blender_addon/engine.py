@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import bpy
 import numpy as np
 
+from . import creases as creases_mod
 from . import geometry_nodes as gn
 from . import mesh_io, results, snapshot, stack
 from . import settings as settings_mod
@@ -259,10 +260,15 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
                      f"carries no record of its input", progress, render=render)
     if force and not render:
         _states.pop(state_key(obj, mod, True), None)  # renders rebuild too
+    # creases (blender_addon/creases.py) from what the modifier receives: in the settings
+    # key, so a crease change rebuilds
+    crz = creases_mod.from_carried(inp.carried)
+    skey = skey + (("creases", crz.key),)
     _copy_materials(obj.data, res.data)
     outcome = _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0)
     if outcome is None:
-        outcome = _rebuild(obj, mod, res, settings, skey, inp, resolution, progress, t0, render)
+        outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz), progress, t0,
+                           render)
     return SyncResult(outcome.status, outcome.message, outcome.rebind, retry) if retry else outcome
 
 
@@ -302,14 +308,16 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
     return None
 
 
-def _rebuild(obj, mod, res, settings, skey, inp, resolution, progress, t0, render):
+def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
+    """A full build at ``build = (resolution, creases)`` into result `res`."""
+    resolution, crz = build
     from gerbs_core.errors import GERBSError, InvalidMeshError
 
     key = state_key(obj, mod, render)
     X = inp.positions.astype(np.float64)
     st = SurfaceState(settings=skey, input=inp, positions=X, rest=X, result_uid=res.session_uid)
     try:
-        built = build_surface(settings, inp, resolution, progress)
+        built = build_surface(settings, inp, resolution, progress, crz)
     except GERBSError as exc:
         return _fail(obj, mod, key, st, format_error(exc), progress,
                      problem=exc if isinstance(exc, InvalidMeshError) else None, render=render)

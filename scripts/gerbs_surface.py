@@ -11,6 +11,12 @@ and writes OBJ or glTF (by the output extension) with Blender's exporters,
 modifiers applied. What reaches the surface is the mesh as stored; see
 :func:`import_mesh` for what each importer does and ``--merge-distance``.
 
+Creases: the modifier uses Blender's ``crease_edge`` / ``crease_vert`` attributes.
+Of the input formats only PLY brings creases along (Blender's PLY exporter and importer
+carry point attributes: ``crease_vert``; no format carries edge creases), so
+``--crease-angle DEG`` creases the edges sharper than DEG degrees and
+``--sharp-creases`` those the importer marks sharp (:func:`mark_creases`).
+
 Safety: paths are checked before anything is read (the output may not be the
 input, a directory, or below a file; a glTF input may only reference files in
 its own folder), the result is exported into a temporary folder beside the
@@ -67,12 +73,20 @@ def parse_args(argv):
     p.add_argument("--merge-distance", type=float, default=None, metavar="D",
                    help="weld vertices closer than D (0: only coincident ones) before "
                         "building, e.g. seams split by an exporter; off by default")
+    p.add_argument("--crease-angle", type=float, default=None, metavar="DEG",
+                   help="fully crease the edges whose faces meet at more than DEG degrees "
+                        "(angle between their normals, 0..180): sharp mesh edges stay sharp")
+    p.add_argument("--sharp-creases", action="store_true",
+                   help="fully crease the edges the importer marks sharp (OBJ smoothing "
+                        "groups, glTF split normals)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     if args.output is None:
         args.output = Path("out") / f"{args.input.stem}_gerbs.glb"
     if args.merge_distance is not None and not args.merge_distance >= 0:  # (also NaN)
         raise UserError(f"--merge-distance must be >= 0, got {args.merge_distance}")
+    if args.crease_angle is not None and not 0 <= args.crease_angle <= 180:  # (also NaN)
+        raise UserError(f"--crease-angle must be in [0, 180] degrees, got {args.crease_angle}")
     return args
 
 
@@ -207,6 +221,57 @@ def import_mesh(bpy, path: Path):
     return [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
 
 
+# --- creases --------------------------------------------------------------------
+
+def _get(collection, name, n, dtype, width=1):
+    import numpy as np
+    buf = np.empty(n * width, dtype=dtype)
+    collection.foreach_get(name, buf)
+    return buf.reshape(-1, width) if width > 1 else buf
+
+
+def edge_angles(mesh):
+    """(E,) degrees between the normals of each edge's first two faces (0 for edges of fewer
+    faces) of an evaluated mesh."""
+    import numpy as np
+    E, F, C = len(mesh.edges), len(mesh.polygons), len(mesh.loops)
+    normals = _get(mesh.polygons, "normal", F, np.float32, 3).astype(np.float64)
+    face = np.repeat(np.arange(F), _get(mesh.polygons, "loop_total", F, np.int32))
+    edge = _get(mesh.attributes[".corner_edge"].data, "value", C, np.int32)
+    order = np.argsort(edge, kind="stable")
+    e, f = edge[order], face[order]
+    first = np.searchsorted(e, np.arange(E))
+    count = np.bincount(e, minlength=E)
+    two = np.flatnonzero(count >= 2)
+    out = np.zeros(E)
+    c = np.einsum("ij,ij->i", normals[f[first[two]]], normals[f[first[two] + 1]])
+    out[two] = np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
+    return out
+
+
+def mark_creases(bpy, obj, angle=None, sharp=False) -> int:
+    """Fully crease (Blender's ``crease_edge`` = 1) the edges of the imported `obj` whose
+    dihedral angle exceeds `angle` degrees and, with `sharp`, those marked sharp; creases
+    the file brought along are kept. Read from the evaluated mesh; returns the count."""
+    import numpy as np
+    mesh = obj.data.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    E = len(mesh.edges)
+    old = mesh.attributes.get("crease_edge")
+    w = np.zeros(E, np.float32) if old is None else _get(old.data, "value", E, np.float32)
+    full = np.zeros(E, bool)
+    if angle is not None:
+        full |= edge_angles(mesh) > angle
+    flag = mesh.attributes.get("sharp_edge")
+    if sharp and flag is not None:
+        full |= _get(flag.data, "value", E, bool)
+    w = np.where(full, np.float32(1.0), w)
+    attr = obj.data.attributes.get("crease_edge") or \
+        obj.data.attributes.new("crease_edge", "FLOAT", "EDGE")
+    attr.data.foreach_set("value", w)
+    obj.data.update()
+    return int(full.sum())
+
+
 # --- export ---------------------------------------------------------------------
 
 def export_mesh(bpy, objects, out: Path, protected) -> None:
@@ -262,6 +327,10 @@ def run(args, src: Path, out: Path, protected) -> None:
         if not objects:
             raise UserError(f"{args.input} contains no mesh")
         for obj in objects:
+            if args.crease_angle is not None or args.sharp_creases:
+                n = mark_creases(bpy, obj, args.crease_angle, args.sharp_creases)
+                if not args.quiet:
+                    print(f"{obj.name}: {n} edges creased", file=sys.stderr)
             if not args.quiet:
                 print(f"{obj.name}: {len(obj.data.vertices)} vertices, "
                       f"{len(obj.data.polygons)} faces", file=sys.stderr)

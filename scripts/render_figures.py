@@ -8,6 +8,8 @@ Blender figures (real ``bpy``, Cycles on the CPU; OpenImageDenoise when samples 
   zebra_subsurf                 reflection lines: GERBS | Blender Subdivision Surface (matched counts)
   zebra_kinked                  reflection lines: GERBS | exact (kinked) polygon gauge, with the
                                 mesh edges drawn on the surface; second row: close-ups
+  zebra_crease                  reflection lines: GERBS with one edge loop fully creased |
+                                the same mesh without creases
 Plots (matplotlib, Agg; the optional ``docs`` extra):
   kernels                       F and b of ERBS (several parameter sets), BFBS, logistic, affine, step
   partition                     partition of unity Psi_i on a Delaunay star-1 cover
@@ -34,7 +36,8 @@ import numpy as np  # noqa: E402
 
 from figures import gerbs  # noqa: E402
 
-BLENDER_FIGURES = ("suzanne", "icosphere", "mixed", "zebra_subsurf", "zebra_kinked")
+BLENDER_FIGURES = ("suzanne", "icosphere", "mixed", "zebra_subsurf", "zebra_kinked",
+                   "zebra_crease")
 PLOT_FIGURES = ("kernels", "partition", "convergence")
 ALL_FIGURES = BLENDER_FIGURES + PLOT_FIGURES
 
@@ -86,6 +89,20 @@ ZEBRA_SCENES = {
     "zebra_subsurf": dict(mesh=_icosphere, view=(0.9, -1.5, 0.8), stripes=14.0, level=(3, 2)),
     "zebra_kinked": dict(mesh=_icosahedron, view=(0.9, -1.5, 0.8), stripes=22.0, resolution=(24, 6)),
 }
+
+
+
+
+def _creased_sphere():
+    """A UV sphere (16 x 8) and its creases: the latitude loop above the equator, full."""
+    from gerbs_core.datasets.primitives import uv_sphere
+
+    v, f = uv_sphere(16, 8)
+    loop = 1 + 16 * 2 + np.arange(16)
+    return v, f, {(int(a), int(b)): 1.0 for a, b in zip(loop, np.roll(loop, -1))}
+
+
+CREASE_SCENE = dict(mesh=_creased_sphere, view=(0.9, -1.5, 0.5), stripes=14.0, resolution=(24, 6))
 
 
 # ---------------------------------------------------------------- Blender figures
@@ -244,9 +261,31 @@ class Renderer:
             return sc.save_png(np.concatenate([top, gap, bottom]), self.out / f"{name}.png"), info
         return sc.save_png(sc.side_by_side([left, right]), self.out / f"{name}.png"), info
 
+    def crease_pair(self, name: str):
+        """Zebra of a smooth mesh with one fully creased edge loop | without creases; the
+        normal jump across the crease and elsewhere are measured on the way."""
+        from figures import scene as sc
+
+        spec = CREASE_SCENE
+        v, f, creases = spec["mesh"]()
+        res = spec["resolution"][1 if self.quick else 0]
+        halves, info = [], {"resolution": res}
+        for tag, caption, opts in (("creased", "GERBS, one edge loop creased", {"creases": creases}),
+                                   ("smooth", "GERBS, no creases", {})):
+            pts, tris, cn, nrm, jump, _ = gerbs.tessellate_split(v, f, res, **opts)
+            if not halves:
+                center, radius = sc.bounding_sphere(pts)
+            info[f"{tag}_normal_jump_deg"] = float(f"{jump:.3g}")
+            halves.append(self._zebra_half(
+                tag, caption, lambda m, p=pts, t=tris, c=cn: m.surface_object("GERBS", p, t, c),
+                spec["view"], center, radius, spec["stripes"]))
+        return sc.save_png(sc.side_by_side(halves), self.out / f"{name}.png"), info
+
     def render(self, name: str):
         if name in WIRE_SCENES:
             return self.wire_figure(name)
+        if name == "zebra_crease":
+            return self.crease_pair(name)
         return self.zebra_pair(name)
 
     def close(self):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["CONVEX_SCALE", "adaptive_scales", "blend_check", "closed_form_fit",
+__all__ = ["CONVEX_SCALE", "CREASE_SCALE", "adaptive_scales", "blend_check", "closed_form_fit",
            "fit_blend_widths", "overshoot_profile", "build_blend", "build_blend_ragged",
            "RaggedBlend"]
 
@@ -27,6 +27,11 @@ CONVEX_SCALE = 0.9        # c of a line next to a convex corner (adaptive: the f
 
 
 _C_MAX = 0.97             # adaptive c of a convex-cornered line stays <= this
+
+# c of the end lines of an open star whose end ray is a cut crease
+# (:mod:`gerbs_core.mesh.creases`): fixed, so that the two sides of the crease see the same
+# rho~ = shrink c |ab| on it (the adaptive c depends on the far edges of each side)
+CREASE_SCALE = CONVEX_SCALE
 
 
 def adaptive_scales(n_edges, ea, eb, nA, pA, nB, pB, roomA, roomB, kappa, kernel):
@@ -251,7 +256,18 @@ class RaggedBlend:
         self.line_m, self.line_inv, self.rmin, self.rmax = line_m, line_inv, rmin, rmax
 
 
-def build_blend_ragged(theta, normal, dist, ptr, closed, span, kappa, kernel) -> RaggedBlend:
+def _fix_end_scales(c, fixed, closed, sptr, kappa):
+    """c of the first / last super-piece := max(CREASE_SCALE, kappa) for the open stars whose
+    start / end ray is marked in ``fixed`` (S, 2) (crease rays), in place."""
+    P = np.diff(sptr)
+    fx = np.asarray(fixed, dtype=bool).reshape(-1, 2) & (~closed & (P > 0))[:, None]
+    val = max(CREASE_SCALE, kappa)
+    c[sptr[:-1][fx[:, 0]]] = val
+    c[sptr[1:][fx[:, 1]] - 1] = val
+
+
+def build_blend_ragged(theta, normal, dist, ptr, closed, span, kappa, kernel,
+                       fixed=None) -> RaggedBlend:
     """Edge lines (pulled in by c) blended directly across each corner, for S stars at once.
 
     theta (N,): the stars' polar vertex angles, star i at theta[ptr[i]:ptr[i+1]] (K_i + 1
@@ -260,7 +276,9 @@ def build_blend_ragged(theta, normal, dist, ptr, closed, span, kappa, kernel) ->
     (super-pieces); every remaining corner gets ONE GERBS transition between its two
     lines, initially half of each adjacent super-piece (the whole of it at an open end),
     narrowed by :func:`fit_blend_widths` until certified. All array operations run over
-    all stars at once (no per-star Python work).
+    all stars at once (no per-star Python work). ``fixed`` (S, 2) bool, optional: open
+    stars whose start / end line gets the fixed scale max(CREASE_SCALE, kappa) instead of
+    the adaptive one (crease rays: rho~ there then depends on the ray alone).
     """
     theta, normal, dist = (np.asarray(a, dtype=np.float64) for a in (theta, normal, dist))
     ptr = np.asarray(ptr, dtype=np.int64)
@@ -316,6 +334,8 @@ def build_blend_ragged(theta, normal, dist, ptr, closed, span, kappa, kernel) ->
     roomB = np.where(has_end[cj], 0.5, 1.0) * width[cj]
     c = adaptive_scales(len(sp_piece), pj, cj, nA, sp[pj], nB, sp[cj], roomA, roomB,
                         kappa, kernel)
+    if fixed is not None:
+        _fix_end_scales(c, fixed, closed, sptr, kappa)
     wa, wb, cok, _, _ = fit_blend_widths(nA, sp[pj], c[pj], nB, sp[cj], c[cj], roomA, roomB,
                                          kappa, kernel)
     ok &= np.bincount(sstar[cj][~cok], minlength=S) == 0
@@ -355,13 +375,14 @@ def build_blend_ragged(theta, normal, dist, ptr, closed, span, kappa, kernel) ->
     return RaggedBlend(ok, kptr, kn, mm, 1.0 / cc, rmin, rmax)
 
 
-def build_blend(theta, normal, dist, closed, span, kappa, kernel):
+def build_blend(theta, normal, dist, closed, span, kappa, kernel, fixed=None):
     """:func:`build_blend_ragged` for one star: (knots, m, a, b, Rmin, Rmax) (local lines
     u_j = a_j cos(theta - m_j) + b_j, b = 0; R = u~ / u_exact over everything: rho~/rho in
-    [1/Rmax, 1/Rmin]) or None if some corner cannot be certified."""
+    [1/Rmax, 1/Rmin]) or None if some corner cannot be certified. fixed: (start, end) bools
+    or None (see :func:`build_blend_ragged`)."""
     theta = np.asarray(theta, dtype=np.float64)
     rb = build_blend_ragged(theta, normal, dist, [0, len(theta)], [closed], [span], kappa,
-                            kernel)
+                            kernel, None if fixed is None else [fixed])
     if not rb.ok[0]:
         return None
     a = rb.line_inv

@@ -100,6 +100,10 @@ class RadialEnvelope:
     exact : bool
         If True, rho~ = shrink * rho exactly (kinked: for tests that must
         detect kinks).
+    fixed_ends : (bool, bool)
+        Open stars: the first / last line's pull-in scale is fixed
+        (:data:`~gerbs_core.gauge.blend.CREASE_SCALE`) instead of adaptive, so
+        rho~ on that end ray depends only on its length (crease rays).
 
     Attributes: ``theta``, ``radius``, ``normal`` (K,), ``dist`` (K,),
     ``span``, ``closed``, ``kappa``, ``shrink``, ``exact``, ``kernel``,
@@ -109,13 +113,15 @@ class RadialEnvelope:
     """
 
     def __init__(self, theta, radius, closed=True, kappa=0.8, shrink=0.95, kernel=None,
-                 exact=False):
+                 exact=False, fixed_ends=(False, False)):
         self._setup(theta, radius, closed, kappa, shrink, kernel, exact)
+        fixed = (bool(fixed_ends[0]), bool(fixed_ends[1]))
         if self.exact:
             self._finish_exact()
         else:
             self._finish_smooth(build_blend(self.theta, self.normal, self.dist, self.closed,
-                                            self.span, self.kappa, self.kernel))
+                                            self.span, self.kappa, self.kernel,
+                                            fixed if any(fixed) else None))
 
     @classmethod
     def _adopt(cls, theta, radius, closed, knots, line_m, line_a, line_b, method, min_ratio,

@@ -181,10 +181,11 @@ class EnvelopeTable:
 
 
 def envelope_table(theta, radius, ptr, closed, kappa=0.8, shrink=0.95, kernel=None,
-                   exact=False) -> EnvelopeTable:
+                   exact=False, fixed=None) -> EnvelopeTable:
     """The envelopes of S stars (star i: polar vertices theta[ptr[i]:ptr[i+1]],
-    radius[...]; ``closed`` (S,)), as :class:`~gerbs_core.gauge.envelope.RadialEnvelope`
-    would build each (same parameters), in one vectorized pass."""
+    radius[...]; ``closed`` (S,); ``fixed`` (S, 2) optional: the ``fixed_ends`` of open
+    stars), as :class:`~gerbs_core.gauge.envelope.RadialEnvelope` would build each (same
+    parameters), in one vectorized pass."""
     from .envelope import RadialEnvelope, _check_unit_interval
     theta = np.asarray(theta, dtype=np.float64)
     radius = np.asarray(radius, dtype=np.float64)
@@ -208,7 +209,7 @@ def envelope_table(theta, radius, ptr, closed, kappa=0.8, shrink=0.95, kernel=No
         return EnvelopeTable(ptr, theta, m, a, np.zeros_like(a), closed, theta, radius, ptr,
                              np.full(S, "exact"), np.full(S, shrink), kappa, shrink, True,
                              kernel)
-    rb = build_blend_ragged(theta, normal, dist, ptr, closed, span, kappa, kernel)
+    rb = build_blend_ragged(theta, normal, dist, ptr, closed, span, kappa, kernel, fixed)
     good = rb.ok & (1.0 / rb.rmin <= 1.0 + 1e-9) & (1.0 / rb.rmax >= kappa * (1.0 - 1e-9))
     method = np.where(good, "blend", "")
     min_ratio = shrink / rb.rmax
@@ -221,7 +222,8 @@ def envelope_table(theta, radius, ptr, closed, kappa=0.8, shrink=0.95, kernel=No
         # the ragged arrays are then assembled star by star
         fb = {i: RadialEnvelope(theta[ptr[i]:ptr[i + 1]], radius[ptr[i]:ptr[i + 1]],
                                 closed=bool(closed[i]), kappa=kappa, shrink=shrink,
-                                kernel=kernel)
+                                kernel=kernel,
+                                fixed_ends=(False, False) if fixed is None else fixed[i])
               for i in np.flatnonzero(~good).tolist()}
         kp = rb.knot_ptr
         cols = {"knots": [], "line_m": [], "line_a": [], "line_b": []}

@@ -1,20 +1,42 @@
 """Chain rules of the size functions: gauge -> bump psi = b(g) -> partition Psi = psi / sum psi.
 
-A *jet* is a list [f, df, d2f] up to order nu, with df (..., 2) and d2f
-(..., 2, 2) derivatives with respect to whatever 2-D coordinates the inputs'
-derivatives are taken in (face coordinates for mesh surfaces, the plane for
-scattered points). All exact: closed-form chain and quotient rules.
+A *jet* is a list [f, df, d2f] up to order nu, with df (..., n) and d2f
+(..., n, n) derivatives with respect to whatever coordinates the inputs'
+derivatives are taken in (face coordinates for mesh surfaces, the plane or R^n for
+scattered points). All exact: closed-form chain and quotient rules. This is the one
+implementation of g -> psi for every cover (mesh stars, planar and n-D star covers,
+ball covers of every metric).
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["outer", "star_gauge_jet", "bump_jet", "partition_jet"]
+__all__ = ["outer", "polar_jet", "star_gauge_jet", "bump_derivs", "chain_jet", "bump_jet",
+           "partition_jet"]
 
 
 def outer(a, b):
     """a b^T over the last axis: (..., 2), (..., 2) -> (..., 2, 2)."""
     return a[..., :, None] * b[..., None, :]
+
+
+def polar_jet(y, nu: int):
+    """Jets of the polar coordinates r = |y|, theta = atan2(y1, y0) at y (..., 2) of the
+    plane: dr = e_r, Hr = e_t e_t^T / r, dtheta = e_t / r,
+    Htheta = -(e_r e_t^T + e_t e_r^T) / r^2. At y = 0 (no direction) the derivatives are
+    taken along e_r = (1, 0) with r replaced by 1; callers mask that point."""
+    r = np.hypot(y[..., 0], y[..., 1])
+    r_jet, t_jet = [r], [np.arctan2(y[..., 1], y[..., 0])]
+    if nu >= 1:
+        safe = np.where(r > 0, r, 1.0)
+        er = np.where((r > 0)[..., None], y / safe[..., None], np.array([1.0, 0.0]))
+        et = np.stack([-er[..., 1], er[..., 0]], -1)
+        r_jet.append(er)
+        t_jet.append(et / safe[..., None])
+    if nu >= 2:
+        r_jet.append(outer(et, et) / safe[..., None, None])
+        t_jet.append(-(outer(er, et) + outer(et, er)) / (safe * safe)[..., None, None])
+    return r_jet, t_jet
 
 
 def star_gauge_jet(r_jet, theta_jet, u, nu: int):
@@ -37,17 +59,32 @@ def star_gauge_jet(r_jet, theta_jet, u, nu: int):
     return out
 
 
-def bump_jet(kernel, g_jet, nu: int):
-    """psi = b(g) = 1 - F(g) (the GERBS bump of eq. (1)), with F the kernel's CDF."""
-    g = g_jet[0]
-    dF = kernel.cdf_derivs(g, nu)
-    out = [1.0 - dF[0]]
-    if nu >= 1:
-        out.append(-dF[1][..., None] * g_jet[1])
-    if nu >= 2:
-        out.append(-dF[2][..., None, None] * outer(g_jet[1], g_jet[1])
-                   - dF[1][..., None, None] * g_jet[2])
+def bump_derivs(kernel, t, nu: int):
+    """[b, b', b''][:nu + 1] of the GERBS bump b = 1 - F on [0, 1), 0 beyond (eq. (1)), at
+    t >= 0 (F the kernel's CDF); exactly 0 (values and derivatives) for t >= 1."""
+    d = kernel.cdf_derivs(np.minimum(t, 1.0), max(nu, 0))
+    inside = t < 1.0
+    out = [np.where(inside, 1.0 - d[0], 0.0)]
+    for k in range(1, nu + 1):
+        out.append(np.where(inside, -d[k], 0.0))
     return out
+
+
+def chain_jet(bt, g_jet, nu: int):
+    """Jet of b(g(y)) from [b, b', b''] at g and g's jet: d(b o g) = b' dg,
+    d2(b o g) = b'' dg dg^T + b' d2g."""
+    out = [bt[0]]
+    if nu >= 1:
+        out.append(bt[1][..., None] * g_jet[1])
+    if nu >= 2:
+        out.append(bt[2][..., None, None] * outer(g_jet[1], g_jet[1])
+                   + bt[1][..., None, None] * g_jet[2])
+    return out
+
+
+def bump_jet(kernel, g_jet, nu: int):
+    """psi = b(g) = 1 - F(g) (the GERBS bump of eq. (1)), 0 for g >= 1."""
+    return chain_jet(bump_derivs(kernel, g_jet[0], nu), g_jet, nu)
 
 
 def partition_jet(psi_jet, nu: int, axis: int = 0):

@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from .envelope import TWO_PI, RadialEnvelope
+from .jet import bump_jet, polar_jet, star_gauge_jet
 from ..errors import InvalidParameterError
 
 __all__ = ["StarGauge", "RadialEnvelope"]
@@ -181,26 +182,19 @@ class StarGauge:
         """(g, grad g, Hess g) up to order nmax (a tuple of nmax+1 arrays)."""
         if nmax not in (0, 1, 2):
             raise InvalidParameterError("nmax", f"must be 0, 1 or 2, got {nmax!r}")
-        r, phi, theta, inside = self._polar(y)
-        U = self._chart_u(theta, nmax)
-        g = np.where(inside, r * U[0], np.inf)
-        out = [g]
-        if nmax >= 1:
-            c, s = np.cos(phi), np.sin(phi)
-            bad = ~inside | (r == 0.0)
-            gx = U[0] * c - U[1] * s          # U e_r + U' e_phi
-            gy = U[0] * s + U[1] * c
-            grad = np.stack([gx, gy], axis=-1)
-            grad[bad] = np.nan
-            out.append(grad)
-        if nmax >= 2:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                k = (U[0] + U[2]) / r
-            ephi = np.stack([-s, c], axis=-1)
-            hess = k[..., None, None] * ephi[..., :, None] * ephi[..., None, :]
-            hess[bad] = np.nan
-            out.append(hess)
+        jet, inside, r = self._gauge_jet(y, nmax)
+        out = [np.where(inside, jet[0], np.inf)]
+        bad = ~inside | (r == 0.0)
+        for i in range(1, nmax + 1):
+            out.append(np.where(bad.reshape(bad.shape + (1,) * i), np.nan, jet[i]))
         return tuple(out)
+
+    def _gauge_jet(self, y, nmax):
+        """The jet of g = r U(phi) (:func:`gerbs_core.gauge.jet.star_gauge_jet`), the
+        inside-sector mask and r."""
+        r, phi, theta, inside = self._polar(y)
+        r_jet, t_jet = polar_jet(np.asarray(y, dtype=np.float64) - self.center, nmax)
+        return star_gauge_jet(r_jet, t_jet, self._chart_u(theta, nmax), nmax), inside, r
 
     def g(self, y, nu=0):
         """g(y) (nu=0), gradient (..., 2) (nu=1) or Hessian (..., 2, 2) (nu=2)."""
@@ -219,31 +213,13 @@ class StarGauge:
         """
         if nmax not in (0, 1, 2):
             raise InvalidParameterError("nmax", f"must be 0, 1 or 2, got {nmax!r}")
-        r, phi, theta, inside = self._polar(y)
-        U = self._chart_u(theta, nmax)
-        g = r * U[0]
-        act = inside & (g < 1.0)
-        F = np.zeros((nmax + 1,) + g.shape)
-        F[0] = 1.0
-        if act.any():
-            F[:, act] = self.kernel.cdf_derivs(g[act], nmax)
-        psi = np.where(act, 1.0 - F[0], 0.0)
-        out = [psi]
-        if nmax >= 1:
-            c, s = np.cos(phi), np.sin(phi)
-            gx = U[0] * c - U[1] * s
-            gy = U[0] * s + U[1] * c
-            f1 = np.where(act, F[1], 0.0)
-            out.append(np.stack([-f1 * gx, -f1 * gy], axis=-1))
-        if nmax >= 2:
-            f2 = np.where(act, F[2], 0.0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                k = np.where(f1 != 0.0, f1 * (U[0] + U[2]) / np.where(r > 0, r, 1.0), 0.0)
-            hess = np.empty(g.shape + (2, 2))
-            hess[..., 0, 0] = -f2 * gx * gx - k * s * s
-            hess[..., 0, 1] = hess[..., 1, 0] = -f2 * gx * gy + k * s * c
-            hess[..., 1, 1] = -f2 * gy * gy - k * c * c
-            out.append(hess)
+        g_jet, inside, r = self._gauge_jet(y, nmax)
+        g_jet[0] = np.where(inside, g_jet[0], np.inf)
+        jet = bump_jet(self.kernel, g_jet, nmax)
+        live = inside & (r > 0.0)      # (beyond g = 1 the bump's derivatives are exactly 0)
+        out = [jet[0]]
+        for i in range(1, nmax + 1):
+            out.append(np.where(live.reshape(live.shape + (1,) * i), jet[i], 0.0))
         return tuple(out)
 
     def psi(self, y, nu=0):

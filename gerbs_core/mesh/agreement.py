@@ -236,24 +236,31 @@ def _chosen(cands, choice, part, V):
                          shape=(V * MMAX, V))
 
 
-def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule):
+def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, sharp=None,
+              constraints=None):
     """(degrees (V,), fits :class:`gerbs_core.mesh.coupling.CoupledFits`): the coefficients
     of every vertex's local function, ``fits(X).reshape(V, MMAX, 3)``, in unscaled chart
     coordinates, chosen and coupled on the rest positions X (V, 3) as in the module
-    docstring."""
+    docstring. sharp (F,): the faces' sharpness s_f (default :func:`face_sharpness`);
+    constraints: optional callable degrees (V,) -> linear constraints on the coefficients
+    (:func:`gerbs_core.mesh.crease_fits.curve_constraints`) or None."""
     V = topo.n_vertices
     cands = candidate_fits_all(rings, rule.candidates)
-    sharp = face_sharpness(topo, X, rule.sharp_from, rule.sharp_to)
+    if sharp is None:
+        sharp = face_sharpness(topo, X, rule.sharp_from, rule.sharp_to)
     smp = _samples(topo, charts, corners2d, cover, rings.h, rule.resolution, sharp)
     choice = _choose(cands, X, smp, rule, V) if len(cands) > 1 else np.zeros(V, np.int64)
     degrees = np.array([c.degree for c in cands])[choice]
     chosen = _chosen(cands, choice, "matrix", V)
-    if not (rule.sweeps and (rule.mu or rule.lam)):
-        return degrees, identity_fits(chosen)
     normals = np.zeros((V, MMAX, MMAX))
     for i, c in enumerate(cands):
         mine = np.flatnonzero(choice == i)
         M = n_monomials(c.degree)
         normals[mine, :M, :M] = c.normal[mine]
+    cons = None if constraints is None else constraints(degrees)
+    if not (rule.sweeps and (rule.mu or rule.lam)):
+        proj = None if cons is None else cons.projection(normals, rings.h, degrees, MMAX)
+        return degrees, identity_fits(chosen, proj)
     rhs = _chosen(cands, choice, "rhs", V)
-    return degrees, coupled_fits(chosen, rhs, normals, degrees, smp, rule, rings.h, DMAX)
+    return degrees, coupled_fits(chosen, rhs, normals, degrees, smp, rule, rings.h, DMAX,
+                                 cons)

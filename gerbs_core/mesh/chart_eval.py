@@ -15,7 +15,7 @@ def chart_evaluate(surface, v: int, y, nu: int = 0, corner=None):
     """[S (N,3), dS/dy (N,3,2), d2S/dy2 (N,3,2,2)] up to nu at chart points y (N, 2) of
     vertex v; see :meth:`gerbs_core.mesh.surface.BlendingSurface.chart_evaluate`."""
     y = np.atleast_2d(np.asarray(y, dtype=np.float64))
-    topo, ch = surface.topology, surface.charts
+    topo, ch = surface.model.topology, surface.charts
     star = topo.star_corners[topo.star_offsets[v]:topo.star_offsets[v + 1]]
     c, x = ch.from_chart(v, y, star)
     if corner is not None:

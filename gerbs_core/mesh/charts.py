@@ -12,7 +12,9 @@ boundary vertices (open fan starting at the boundary face whose first edge
 v -> next is a border edge): rule ``"keep"`` s_v = 1 (a flat metric mesh is then
 charted isometrically), compressed to s_v = 1.5 pi / T_v when T_v > 1.5 pi so that
 the chart stays injective; rule ``"straighten"`` s_v = pi / T_v (the border is a
-straight line through v).
+straight line through v). Per-vertex scales may be given instead (``scale``: the
+copies of a creased vertex, :mod:`gerbs_core.mesh.creases`: pi / T_v to straighten
+a crease chain through v, 2 pi / T_v for the full-disc chart of a dart).
 
 Two faces sharing a spoke unfold isometrically into one plane and angle scaling
 about a point is smooth away from it, so chart transitions are C-infinity on
@@ -156,7 +158,7 @@ class VertexCharts:
         y = np.asarray(y, dtype=np.float64)
         s = self.scale[v]
         phi = np.arctan2(y[:, 1], y[:, 0])
-        if not self.boundary[v]:
+        if not self.boundary[v] or s * self.span[v] >= 2.0 * np.pi * (1.0 - 1e-12):
             phi = np.mod(phi, 2.0 * np.pi)
         else:
             phi = np.where(phi < -0.25 * np.pi, phi + 2.0 * np.pi, phi)
@@ -170,12 +172,13 @@ class VertexCharts:
         return c, x
 
 
-def vertex_charts(topo, corners2d, angles, rule: str = "keep") -> VertexCharts:
+def vertex_charts(topo, corners2d, angles, rule: str = "keep", scale=None) -> VertexCharts:
     """Build all vertex charts of a :class:`~gerbs_core.mesh.topology.MeshTopology`.
 
     corners2d (C,2), angles (C,): the face layouts (:mod:`gerbs_core.mesh.layout`).
     Stars are the topology's ordered stars (counter-clockwise; boundary fans start
-    at the face whose edge v -> next is a border edge).
+    at the face whose edge v -> next is a border edge). scale (V,) optional: s_v where
+    finite (the others by the rule).
     """
     if rule not in BOUNDARY_RULES:
         raise InvalidParameterError("boundary", f"must be one of {BOUNDARY_RULES}, got {rule!r}")
@@ -185,6 +188,7 @@ def vertex_charts(topo, corners2d, angles, rule: str = "keep") -> VertexCharts:
     sc = np.asarray(topo.star_corners, dtype=np.int64)
     boundary = np.asarray(topo.vertex_is_boundary, dtype=bool)
     V = len(so) - 1
+    scale_override = None if scale is None else np.asarray(scale, dtype=np.float64)
     ang_sorted = angles[sc]
     cum = np.cumsum(ang_sorted)
     vid = np.repeat(np.arange(V), np.diff(so))
@@ -200,6 +204,8 @@ def vertex_charts(topo, corners2d, angles, rule: str = "keep") -> VertexCharts:
         scale = np.where(wide, KEEP_MAX_SPAN / np.where(span > 0, span, 1.0), scale)
     else:
         scale = np.where(boundary, np.pi / np.where(span > 0, span, 1.0), scale)
+    if scale_override is not None:
+        scale = np.where(np.isfinite(scale_override), scale_override, scale)
     e = corners2d[nxt] - corners2d
     beta = np.arctan2(e[:, 1], e[:, 0])
     return VertexCharts(scale=scale, span=span, boundary=boundary, theta0=theta0,

@@ -29,7 +29,7 @@ from .coupling_local import local_parts, neighbourhood, vertex_graph
 from .fits import pinned_normal_inverse
 from .monomials import monomial_exponents, n_monomials
 
-__all__ = ["CoupledFits", "coupled_fits", "identity_fits", "LOCAL_REACH"]
+__all__ = ["CoupledFits", "CopiedFits", "coupled_fits", "identity_fits", "LOCAL_REACH"]
 
 # hops in the data-fit graph (each up to 2 rings) around moved vertices within which a
 # column of the map and all its intermediates lie, with a margin: data fit 1 hop, each
@@ -46,11 +46,12 @@ class CoupledFits:
     rigidly). Immutable.
     """
 
-    def __init__(self, chosen, sweeps=0, damping=1.0, parts=None):
+    def __init__(self, chosen, sweeps=0, damping=1.0, parts=None, projection=None):
         self.chosen = chosen.tocsr()
         self.sweeps = int(sweeps) if parts is not None else 0
         self.damping = float(damping)
         self._parts = parts
+        self._projection = projection   # crease curve constraints (R, K, G) or None
         self.shape = self.chosen.shape
         self._last = None     # (key, columns): memo of the last columns() request
 
@@ -60,7 +61,7 @@ class CoupledFits:
 
     def _map(self, Y):
         """The map applied to Y: a dense (V, k) array, or a sparse (V, V) matrix."""
-        return _apply(self.chosen, self._parts, self.sweeps, self.damping, Y)
+        return _apply(self.chosen, self._parts, self.sweeps, self.damping, Y, self._projection)
 
     @cached_property
     def operator(self) -> sp.csr_matrix:
@@ -99,17 +100,20 @@ class CoupledFits:
         mmax = self.shape[0] // V
         verts = (neighbourhood(self._graph, cols, LOCAL_REACH) if self.sweeps
                  else np.arange(V))
-        if len(verts) > V // 2:                       # most of the mesh: the map itself
+        # most of the mesh, or crease constraints (global rows): the map itself
+        if len(verts) > V // 2 or self._projection is not None:
             chosen, parts, R, verts = self.chosen, self._parts, np.arange(V * mmax), np.arange(V)
         else:
             chosen, parts, R = local_parts(self.chosen, self._parts, verts, mmax,
                                            self._owner)
         at = np.searchsorted(verts, cols)
         unit = sp.csr_matrix((np.ones(m), (at, np.arange(m))), shape=(len(verts), m))
-        local = sp.csr_matrix(_apply(chosen, parts, self.sweeps, self.damping, unit))
+        pr = self._projection
+        local = sp.csr_matrix(_apply(chosen, parts, self.sweeps, self.damping, unit, pr))
         # minus the row sums of the moved vertices' own rows, in their columns: the same
         # correction as the operator's (these rows' supports lie inside the neighbourhood)
-        sums = _apply(chosen, parts, self.sweeps, self.damping, np.ones((len(verts), 1)))[:, 0]
+        sums = _apply(chosen, parts, self.sweeps, self.damping, np.ones((len(verts), 1)),
+                      pr)[:, 0]
         own = np.flatnonzero(np.isin(R // mmax, cols))
         where = np.argsort(cols)[np.searchsorted(np.sort(cols), R[own] // mmax)]
         local = local - sp.csr_matrix((sums[own], (own, where)), shape=local.shape)
@@ -132,9 +136,23 @@ class CoupledFits:
         return "operator" in self.__dict__
 
 
-def _apply(chosen, p, sweeps, d, Y):
-    """The map (module docstring) with matrices ``chosen``, ``p`` applied to Y."""
-    c = chosen @ Y
+def _project(proj, c, Y):
+    """The linear constraints (crease curves, :mod:`gerbs_core.mesh.crease_fits`), if any:
+    c - R (K c - G Y)."""
+    if proj is None:
+        return c
+    R, K, G = proj
+    c = c - R @ (K @ c - G @ Y)
+    if sp.issparse(c):
+        c = c.tocsr()
+        c.eliminate_zeros()
+    return c
+
+
+def _apply(chosen, p, sweeps, d, Y, proj=None):
+    """The map (module docstring) with matrices ``chosen``, ``p`` applied to Y; ``proj``
+    the crease constraints, imposed after the first fit and every sweep."""
+    c = _project(proj, chosen @ Y, Y)
     if not sweeps:
         return c
     Xs = p["rows"] @ Y                                   # X_v of every row
@@ -143,15 +161,57 @@ def _apply(chosen, p, sweeps, d, Y):
         l = Xs + p["Bu"] @ c                              # l_v at the rows' samples
         T = p["gather"] @ (p["agg"] @ l)                  # sum of the sample's P l
         new = p["blk"] @ (fixed + p["BsT"] @ (p["Dp"] @ T - p["Dpp"] @ l))
-        c = (1.0 - d) * c + d * new
+        c = _project(proj, (1.0 - d) * c + d * new, Y)
         if sp.issparse(c):
             c.eliminate_zeros()
     return c
 
 
-def identity_fits(chosen) -> CoupledFits:
-    """The chosen data fits alone (no coupling sweeps)."""
-    return CoupledFits(chosen)
+class CopiedFits:
+    """The fits of a cut mesh (:mod:`gerbs_core.mesh.creases`) as a map of the ORIGINAL
+    positions: ``fits(X) = inner(X[copy_of])`` (V' MMAX, k); :attr:`operator` (V' MMAX, V)
+    sums the columns of a vertex's copies. Same interface as :class:`CoupledFits`."""
+
+    def __init__(self, inner, cut):
+        self.inner, self._cut = inner, cut
+        self.shape = (inner.shape[0], cut.original.n_vertices)
+
+    def __call__(self, X):
+        return self.inner(self._cut.positions(np.asarray(X, dtype=np.float64)))
+
+    @cached_property
+    def operator(self) -> sp.csr_matrix:
+        op = (self.inner.operator @ self._cut.copy_matrix).tocsr()
+        op.sum_duplicates()
+        op.eliminate_zeros()
+        return op
+
+    @property
+    def operator_built(self) -> bool:
+        return "operator" in self.__dict__
+
+    @property
+    def nnz_estimate(self) -> int:
+        return int(self.operator.nnz) if self.operator_built else self.inner.nnz_estimate
+
+    def columns(self, cols) -> sp.csc_matrix:
+        """Columns ``cols`` (vertices) of :attr:`operator` (csc), from the inner map's columns
+        of their copies (each copy's column added to its vertex's)."""
+        cols = np.asarray(cols, dtype=np.int64).ravel()
+        if self.operator_built:
+            return self.operator.tocsc()[:, cols]
+        copy_of = self._cut.copy_of
+        mine = np.flatnonzero(np.isin(copy_of, cols))
+        at = np.searchsorted(np.sort(cols), copy_of[mine])
+        sel = sp.csr_matrix((np.ones(len(mine)), (np.arange(len(mine)), np.argsort(cols)[at])),
+                            shape=(len(mine), len(cols)))
+        return (self.inner.columns(mine) @ sel).tocsc()
+
+
+def identity_fits(chosen, projection=None) -> CoupledFits:
+    """The chosen data fits alone (no coupling sweeps), constrained by ``projection``
+    ((R, K, G), :meth:`gerbs_core.mesh.crease_fits.CurveConstraints.projection`) if given."""
+    return CoupledFits(chosen, projection=projection)
 
 
 def _block_diagonal(blocks):
@@ -163,8 +223,11 @@ def _block_diagonal(blocks):
     return sp.csr_matrix((blocks[nz], (r[nz], c[nz])), shape=(V * M, V * M))
 
 
-def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax) -> CoupledFits:
-    """The coupled fits (module docstring).
+def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
+                 constraints=None) -> CoupledFits:
+    """The coupled fits (module docstring), with optional linear ``constraints``
+    (:class:`gerbs_core.mesh.crease_fits.CurveConstraints`) imposed after the first fit and
+    every sweep in the metric of the coupled normal matrices.
 
     chosen, rhs (V MMAX, V): the chosen candidates' coefficient operators and the
     right-hand sides of their scaled normal equations; normals (V, MMAX, MMAX) their
@@ -214,4 +277,5 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax) -> CoupledFi
         "Dp": sp.diags(rule.mu * w * P, format="csr"),
         "Dpp": sp.diags(rule.mu * w * P * P, format="csr"),
     }
-    return CoupledFits(chosen, rule.sweeps, rule.damping, parts)
+    proj = None if constraints is None else constraints.projection(N, h, degrees, mmax)
+    return CoupledFits(chosen, rule.sweeps, rule.damping, parts, proj)

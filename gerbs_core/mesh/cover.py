@@ -101,7 +101,7 @@ def _canonical_rotation(seq):
 
 
 def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95, exact=False,
-                    kernel=None):
+                    kernel=None, fixed_ends=None):
     """Smooth envelopes of all vertex stars, in one
     :class:`~gerbs_core.gauge.envelope_table.EnvelopeTable`.
 
@@ -110,6 +110,9 @@ def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95, exact=False
     interior vertex, one open envelope per boundary fan (a function of the unfolded angle;
     only the chart angle is compressed). Stars of the same shape up to rotation share one
     envelope. Array operations over all stars (grouped by valence), no per-vertex work.
+    fixed_ends (V, 2) bool, optional: boundary fans whose start / end ray is a cut crease
+    (fixed end-line scales, :func:`gerbs_core.gauge.blend.build_blend_ragged`); they share
+    envelopes only with fans of the same shape and the same flags.
     """
     from ..gauge.envelope_table import envelope_table
     so = np.asarray(topo.star_offsets, dtype=np.int64)
@@ -119,7 +122,8 @@ def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95, exact=False
     closed_v = ~np.asarray(charts.boundary, dtype=bool)
     corner_env = np.full(topo.n_corners, -1, dtype=np.int64)
     env_offset = np.zeros(topo.n_corners)
-    reps, rep_closed = [], []            # per group: the representative stars (corners)
+    fixed = None if fixed_ends is None else np.asarray(fixed_ends, dtype=bool).reshape(-1, 2)
+    reps, rep_closed, rep_fixed = [], [], []     # per group: the representative stars
     n_env = 0
     for k in np.unique(val[val > 0]).tolist():
         for cl in (True, False):
@@ -130,17 +134,22 @@ def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95, exact=False
             if cl:
                 j = _canonical_rotation(shape[stars])
                 stars = stars[np.arange(len(vs))[:, None], (j[:, None] + np.arange(k)) % k]
-            _, first, inv = np.unique(shape[stars], axis=0, return_index=True,
-                                      return_inverse=True)
+            key = shape[stars]
+            if fixed is not None and not cl:
+                key = np.column_stack([key, fixed[vs, 0] + 2 * fixed[vs, 1]])
+            _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
             corner_env[stars] = (n_env + inv.reshape(-1))[:, None]
             start = charts.theta0[stars[:, 0]] if cl else th[stars[:, 0], 0]
             env_offset[stars] = start[:, None]
             reps.append(stars[first])
             rep_closed.append(cl)
+            rep_fixed.append(np.zeros((len(first), 2), bool) if fixed is None or cl
+                             else fixed[vs[first]])
             n_env += len(first)
     theta, radius, ptr, closed = _chains(reps, rep_closed, th, rr, count, charts)
     table = envelope_table(theta, radius, ptr, closed, kappa=kappa, shrink=shrink,
-                           kernel=kernel, exact=exact)
+                           kernel=kernel, exact=exact,
+                           fixed=None if fixed is None else np.concatenate(rep_fixed))
     return table, corner_env, env_offset
 
 
@@ -235,10 +244,12 @@ class StarCover:
         return bump_jet(self.kernel, star_gauge_jet(r_jet, t_jet, u, nu), nu), pol
 
 
-def star_cover(topo, charts, corners2d, kernel, kappa=0.8, shrink=0.95, exact=False) -> StarCover:
+def star_cover(topo, charts, corners2d, kernel, kappa=0.8, shrink=0.95, exact=False,
+               fixed_ends=None) -> StarCover:
     """The star cover of a mesh with face layouts corners2d (see the module docstring).
     ``exact``: the exact (kinked) star radius instead of the smooth envelope -- a
-    deliberately non-smooth variant, the control of the smoothness tests."""
+    deliberately non-smooth variant, the control of the smoothness tests. ``fixed_ends``
+    (V, 2): see :func:`build_envelopes`."""
     table, ce, eo = build_envelopes(topo, charts, corners2d, kappa=kappa, shrink=shrink,
-                                    exact=exact, kernel=kernel)
+                                    exact=exact, kernel=kernel, fixed_ends=fixed_ends)
     return StarCover(table, ce, eo, kernel)

@@ -14,7 +14,7 @@ import numpy as np
 from ..gauge.jet import partition_jet
 from .monomials import monomials
 
-__all__ = ["groups", "corner_terms", "evaluate", "CHUNK"]
+__all__ = ["groups", "corner_terms", "evaluate", "partition_at", "CHUNK"]
 
 CHUNK = 200_000  # sample x corner terms per chunk: ~50 MB of working arrays at nu = 2
 
@@ -109,3 +109,27 @@ def evaluate(model, X, coef, face_ids, x, nu: int):
         for o, r in zip(out, res):
             o[sel[valid]] = r[valid]
     return out, eps
+
+
+def partition_at(model, f, x, nu):
+    """The partition of unity (eq. (73)) at points x (N, 2) of faces f (N,):
+    :meth:`gerbs_core.mesh.surface.BlendingSurface.partition` (vertices of the repaired
+    mesh: with creases the copies' vertices)."""
+    topo = model.topology
+    nmax = int(topo.face_sizes.max())
+    verts = np.full((len(f), nmax), -1, dtype=np.int64)
+    Ps, ps, dP = np.zeros((len(f), nmax)), np.zeros((len(f), nmax)), np.zeros((len(f), nmax, 2))
+    for n, faces, sel, xb in groups(topo, model.layouts.corners, f, x):
+        u, Psi, _, _ = corner_terms(model, n, faces, xb, nu, degree=1)
+        if model.crease is not None:
+            u = model.crease.copy_of[u]
+        cb = topo.face_offsets[faces][None, :, None] + np.arange(n)[:, None, None]
+        psi = model.cover.psi_jet(model.charts, cb, xb[None], 0)[0][0]
+        valid = sel >= 0
+        s = sel[valid]
+        for k in range(n):
+            verts[s, k] = np.broadcast_to(u[k][:, None], valid.shape)[valid]
+            Ps[s, k], ps[s, k] = Psi[0][k][valid], psi[k][valid]
+            if nu >= 1:
+                dP[s, k] = Psi[1][k][valid]
+    return (verts, Ps, ps, dP) if nu >= 1 else (verts, Ps, ps)

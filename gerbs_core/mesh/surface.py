@@ -25,8 +25,11 @@ import numpy as np
 from ..errors import InvalidParameterError, ResourceLimitError
 from .agreement import MMAX, FairnessRule, fair_fits
 from .charts import BOUNDARY_RULES, vertex_charts
+from .coupling import CopiedFits
 from .cover import require_cover, star_cover
-from .evaluate import corner_terms, evaluate, groups
+from .crease_surface import build_model, crease_input, first_occurrence, merge_tessellation
+from .evaluate import evaluate, partition_at
+from .lattice import Lattice
 from .layout import face_layouts
 from .memory import memory_estimate
 from .monomials import monomials
@@ -69,7 +72,9 @@ class SurfaceModel:
 
     degrees (V,) the local functions' degrees; fits their coefficients as a linear map of
     the positions (:class:`gerbs_core.mesh.coupling.CoupledFits`: ``fits(X)``, and the
-    explicit ``operator`` (V MMAX, V), made on first use).
+    explicit ``operator`` (V MMAX, V), made on first use). With creases
+    (:class:`gerbs_core.mesh.creases.CreaseCut` ``crease``) ``topology`` is the cut mesh and
+    the per-vertex arrays index its vertex copies (``crease.copy_of``).
     """
 
     topology: MeshTopology
@@ -79,6 +84,7 @@ class SurfaceModel:
     degrees: np.ndarray
     fits: object
     boundary: str
+    crease: object = None
 
     @property
     def operator(self):
@@ -113,6 +119,15 @@ class BlendingSurface:
     memory_budget : bytes a tessellation or stencil may use (ResourceLimitError beyond).
     eps0_resolution : lattice resolution of the cover-thickness check :attr:`eps0`.
     merge_distance : None (default) or a distance: weld vertices closer than it first.
+    creases : optional edge crease weights in [0, 1] (Blender's ``crease_edge``) on INPUT
+        vertex pairs: a mapping {(i, j): w} or a pair (edges (K, 2) int, weights (K,)).
+        A weight of 1 cuts the surface along the edge: a crease curve through its vertices,
+        C0 with a normal jump; chains of such edges give smooth crease curves, their ends
+        and vertices with >= 3 of them are corners. Partial weights make the surface near
+        the edge proportionally tighter (still C-infinity). :mod:`gerbs_core.mesh.creases`.
+    corners : optional (V,) input vertex crease weights in [0, 1] (``crease_vert``): 1 makes
+        a crease chain through the vertex a corner; any weight tightens the surface there.
+        Both map through the repair (``vertex_map``; :mod:`gerbs_core.mesh.crease_surface`).
 
     Any mesh is first repaired into an oriented 2-manifold (:mod:`gerbs_core.mesh.repair`:
     bow-ties, non-manifold edges, loose, degenerate and duplicate elements); the surface
@@ -122,6 +137,11 @@ class BlendingSurface:
     (``vertices``, ``rest_positions``, ``normals``, :meth:`with_positions`,
     ``stencil().apply``) are the input's (V, 3).
 
+    With creases the per-vertex arrays (:attr:`degrees`, :attr:`coefficients`,
+    :attr:`charts`, :meth:`local_function`, :meth:`chart_evaluate`) index the vertex
+    copies of the cut mesh (``model.crease.copy_of`` maps them to repaired vertices);
+    outputs (:meth:`tessellate`, :meth:`stencil`, :meth:`lattice`) are on the repaired mesh.
+
     Raises InvalidMeshError (what no surface can come from: NaN, empty, ...) or
     InvalidParameterError; the caller's arrays are never modified. Immutable.
     """
@@ -129,7 +149,8 @@ class BlendingSurface:
     def __init__(self, vertices, faces, kernel=None, rest_positions=None, boundary: str = "keep",
                  normals=None, *, fairness: FairnessRule | None = None, kappa: float = 0.8,
                  shrink: float = 0.95, exact_gauge: bool = False, memory_budget: float = 2.0e9,
-                 eps0_resolution: int = 6, merge_distance: float | None = None):
+                 eps0_resolution: int = 6, merge_distance: float | None = None,
+                 creases=None, corners=None):
         X = _points("vertices", vertices)
         rest = None if rest_positions is None else _points("rest_positions", rest_positions, len(X))
         self.repair = repair_mesh(X, faces, merge_distance=merge_distance, rest_positions=rest)
@@ -158,13 +179,19 @@ class BlendingSurface:
         self.kernel = kernel
         self._normals = None if normals is None else \
             self._unit_normals(normals, len(self.repair.representative))[self.repair.vertex_map]
-        layouts = face_layouts(topo, rest)
-        charts = vertex_charts(topo, layouts.corners, layouts.angles, boundary)
-        cover = star_cover(topo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge)
-        rings = data_rings(topo, charts, layouts.corners)
-        degrees, fits = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
-        degrees.flags.writeable = False
-        self.model = SurfaceModel(topo, layouts, charts, cover, degrees, fits, boundary)
+        cut = crease_input(self.repair, faces, creases, corners)
+        if cut is None:
+            layouts = face_layouts(topo, rest)
+            charts = vertex_charts(topo, layouts.corners, layouts.angles, boundary)
+            cover = star_cover(topo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge)
+            rings = data_rings(topo, charts, layouts.corners)
+            degrees, fits = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
+            degrees.flags.writeable = False
+            self.model = SurfaceModel(topo, layouts, charts, cover, degrees, fits, boundary)
+        else:
+            parts = build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink,
+                                exact_gauge)
+            self.model = SurfaceModel(cut.topology, *parts, boundary, cut)
         self._X = X
         self._X.flags.writeable = False
         self._coef = self._coefficients(X)
@@ -178,19 +205,28 @@ class BlendingSurface:
             raise InvalidParameterError("normals", "must be finite and non-zero")
         return nrm / ln[:, None]
 
+    @property
+    def _Xm(self):
+        """Positions of the model's vertices (the copies of the cut mesh with creases)."""
+        cut = self.model.crease
+        return self._X if cut is None else cut.positions(self._X)
+
     def _coefficients(self, X):
         """(V, MMAX, 3) coefficients of the local functions for positions X; with Hermite
         normals the linear part is projected onto the planes orthogonal to them."""
-        C = self.model.fits(X).reshape(-1, MMAX, 3)
+        cut = self.model.crease
+        C = self.model.fits(X if cut is None else cut.positions(X)).reshape(-1, MMAX, 3)
         if self._normals is not None:
-            n = self._normals
+            n = self._normals if cut is None else self._normals[cut.copy_of]
             C[:, :2] -= np.einsum("vmk,vk->vm", C[:, :2], n)[..., None] * n[:, None, :]
         C.flags.writeable = False
         return C
 
     @property
     def topology(self) -> MeshTopology:
-        return self.model.topology
+        """The repaired mesh's topology (with creases: before the cut)."""
+        cut = self.model.crease
+        return self.model.topology if cut is None else cut.original
 
     @property
     def layouts(self):
@@ -252,7 +288,7 @@ class BlendingSurface:
         ``eps0_resolution``) of max_v psi_v: the thickness of the cover (Definition 11);
         > 0 means no point is left uncovered."""
         from .lattice import Lattice
-        lat = Lattice(self.topology, self.eps0_resolution)
+        lat = Lattice(self.model.topology, self.eps0_resolution)
         x = lat.map_to_polygon(self.layouts.corners, local=True)
         return self._evaluate(lat.local_face, x, 0)[1]
 
@@ -260,7 +296,7 @@ class BlendingSurface:
         require_cover(eps, self.kernel)
 
     def _evaluate(self, f, x, nu):
-        return evaluate(self.model, self._X, self._coef, f, x, nu)
+        return evaluate(self.model, self._Xm, self._coef, f, x, nu)
 
     # ---------------------------------------------------------------- public
     def _face_points(self, face_index, local_coords):
@@ -300,21 +336,7 @@ class BlendingSurface:
         psi (N, n)) with n the largest face size (padding: vertex -1, values 0); with
         nu = 1 also dPsi (N, n, 2)."""
         f, x, _ = self._face_points(face_index, local_coords)
-        nmax = int(self.topology.face_sizes.max())
-        verts = np.full((len(f), nmax), -1, dtype=np.int64)
-        Ps, ps, dP = np.zeros((len(f), nmax)), np.zeros((len(f), nmax)), np.zeros((len(f), nmax, 2))
-        for n, faces, sel, xb in groups(self.topology, self.layouts.corners, f, x):
-            u, Psi, _, _ = corner_terms(self.model, n, faces, xb, nu, degree=1)
-            cb = self.topology.face_offsets[faces][None, :, None] + np.arange(n)[:, None, None]
-            psi = self.model.cover.psi_jet(self.charts, cb, xb[None], 0)[0][0]
-            valid = sel >= 0
-            s = sel[valid]
-            for k in range(n):
-                verts[s, k] = np.broadcast_to(u[k][:, None], valid.shape)[valid]
-                Ps[s, k], ps[s, k] = Psi[0][k][valid], psi[k][valid]
-                if nu >= 1:
-                    dP[s, k] = Psi[1][k][valid]
-        return (verts, Ps, ps, dP) if nu >= 1 else (verts, Ps, ps)
+        return partition_at(self.model, f, x, nu)
 
     def local_function(self, v: int, y, nu: int = 0):
         """l_v and its derivatives at chart points y (N, 2): [(N,3), (N,3,2), (N,3,2,2)]."""
@@ -322,7 +344,7 @@ class BlendingSurface:
         d = int(self.degrees[v])
         mm = monomials(y, d, nu)
         C = self._coef[v, :mm[0].shape[-1]]
-        out = [self._X[v] + mm[0] @ C]
+        out = [self._Xm[v] + mm[0] @ C]
         if nu >= 1:
             out.append(np.einsum("pmj,mc->pcj", mm[1], C))
         if nu >= 2:
@@ -358,16 +380,22 @@ class BlendingSurface:
         """(points (P,3), triangles (T,3) int, normals (P,3)) at `resolution` segments per edge.
 
         Crack-free (shared edge samples once); normals from the analytic derivatives
-        dS/dx1 x dS/dx2 (at mesh vertices from the linear part of l_v).
+        dS/dx1 x dS/dx2 (at mesh vertices from the linear part of l_v). With full creases
+        the two sides of a cut edge are evaluated separately and their samples merged (the
+        same points to rounding); the normals there are the mean of the two sides'.
         """
         lat = self.lattice(resolution)
-        x = lat.map_to_polygon(self.layouts.corners)
-        (S, dS), eps = self._evaluate(lat.face, x, 1)
+        cut = self.model.crease
+        mlat = lat if cut is None else Lattice(self.model.topology, resolution)
+        x = mlat.map_to_polygon(self.layouts.corners)
+        (S, dS), eps = self._evaluate(mlat.face, x, 1)
         self._require_cover(eps)
         nrm = np.cross(dS[..., 0], dS[..., 1])
-        nrm[lat.vertex_sample] = np.cross(self._coef[:, 0, :], self._coef[:, 1, :])
+        nrm[mlat.vertex_sample] = np.cross(self._coef[:, 0, :], self._coef[:, 1, :])
         ln = np.linalg.norm(nrm, axis=1)
         nrm /= np.where(ln > 0, ln, 1.0)[:, None]
+        if mlat is not lat:
+            S, nrm = merge_tessellation(cut, mlat, lat, S, nrm)
         return S, np.array(lat.triangles), nrm
 
     def stencil(self, resolution: int) -> Stencil:
@@ -377,9 +405,24 @@ class BlendingSurface:
         if self._normals is not None:
             raise InvalidParameterError("normals", "stencils need normals=None (with Hermite "
                                         "normals the surface is not a linear map of X)")
+        return self.value_stencil(resolution)
+
+    def value_stencil(self, resolution: int) -> Stencil:
+        """The same linear map without the Hermite normals' projection (with normals=None
+        exactly :meth:`stencil`): carries vertex values (V, k) to the output points,
+        equal at the vertices, through the surface's own partition and fits."""
         from .assembly import assemble
         lat = self.lattice(resolution)
-        base, mono, eps = assemble(self.model, lat)
+        cut = self.model.crease
+        if cut is None:
+            base, mono, eps = assemble(self.model, lat)
+            fits = self.model.fits
+        else:
+            mlat = Lattice(self.model.topology, resolution)
+            base, mono, eps = assemble(self.model, mlat)
+            rows = first_occurrence(cut.sample_map(mlat), lat.n_points)
+            # merged crease samples: one row each; the columns of a vertex's copies summed
+            base, mono = base[rows] @ cut.copy_matrix, mono[rows]
+            fits = CopiedFits(self.model.fits, cut)
         self._require_cover(eps)
-        return Stencil(self.repair.to_input(base), mono,
-                       self.repair.fits_of_input(self.model.fits), lat)
+        return Stencil(self.repair.to_input(base), mono, self.repair.fits_of_input(fits), lat)

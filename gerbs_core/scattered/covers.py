@@ -47,7 +47,7 @@ import numpy as np
 from scipy.spatial import Delaunay, QhullError
 
 from ..errors import InvalidParameterError, InvalidPointSetError
-from .metrics import bump_from_t
+from ..gauge.jet import bump_jet, polar_jet, star_gauge_jet
 
 __all__ = ["PlanarStarCover", "delaunay_cover", "voronoi_cover", "polygon_cover", "padded_ball_query"]
 
@@ -267,29 +267,20 @@ class PlanarStarCover:
         rows, cols = np.nonzero(valid)
         e = edge[rows, cols]
         y = x[rows] - self.centers[self.edge_star[e]]
-        r = np.hypot(y[:, 0], y[:, 1])
+        r_jet, t_jet = polar_jet(y, nu)
+        r = r_jet[0]
         t = np.arctan2(_cross(self.a0[e], y), np.sum(self.a0[e] * y, -1))
         t = np.where(r > 0, t, 0.0)
         inside = (t >= -1e-12) & (t <= self.delta[e] + 1e-12)
-        t = np.clip(t, 0.0, self.delta[e])
-        U = self.u_tilde(e, t, nu)
-        G = r * U[0]
-        bt = bump_from_t(G, self.kernel, nu)
-        vv = np.where(inside, bt[0], 0.0)
-        v[rows, cols] = vv
+        t_jet[0] = np.clip(t, 0.0, self.delta[e])      # the edge's angle: theta - const
+        jet = bump_jet(self.kernel, star_gauge_jet(r_jet, t_jet, self.u_tilde(e, t_jet[0], nu),
+                                                   nu), nu)
+        v[rows, cols] = np.where(inside, jet[0], 0.0)
+        live = inside & (r > 0)      # (beyond g = 1 the bump's derivatives are exactly 0)
         if nu >= 1:
-            safe = np.where(r > 0, r, 1.0)
-            er = y / safe[:, None]
-            et = np.stack([-er[:, 1], er[:, 0]], -1)
-            hh, h1 = U[0], U[1]                             # g = r * U(theta)
-            gg = hh[:, None] * er + h1[:, None] * et
-            live = inside & (r > 0) & (G < 1.0)
-            g[rows, cols] = np.where(live[:, None], bt[1][:, None] * gg, 0.0)
-            if nu >= 2:
-                h2 = U[2]
-                Hg = ((hh + h2) / safe)[:, None, None] * et[:, :, None] * et[:, None, :]
-                Hp = bt[2][:, None, None] * gg[:, :, None] * gg[:, None, :] + bt[1][:, None, None] * Hg
-                h[rows, cols] = np.where(live[:, None, None], Hp, 0.0)
+            g[rows, cols] = np.where(live[:, None], jet[1], 0.0)
+        if nu >= 2:
+            h[rows, cols] = np.where(live[:, None, None], jet[2], 0.0)
         return v, g, h
 
 

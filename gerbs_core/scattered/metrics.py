@@ -36,6 +36,7 @@ import itertools
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..gauge.jet import bump_derivs, chain_jet
 
 __all__ = ["Metric", "Euclidean", "Lp", "LInf", "L1", "QuasiNorm", "Bounded"]
 
@@ -51,26 +52,9 @@ def _weights(weights, n):
     return w
 
 
-def bump_from_t(t, kernel, nu):
-    """b(t), b'(t), b''(t) for t >= 0 (arrays of t's shape); b = 1 - F on [0,1), 0 after."""
-    d = kernel.cdf_derivs(np.minimum(t, 1.0), max(nu, 0))
-    out = [1.0 - d[0]]
-    for k in range(1, nu + 1):
-        out.append(np.where(t < 1.0, -d[k], 0.0))
-    out[0] = np.where(t < 1.0, out[0], 0.0)
-    return out
-
-
-def chain_jet(bt, tg, th, nu):
-    """Jet of b(t(y)) from b-derivatives ``bt`` and t's gradient/Hessian."""
-    v = bt[0]
-    g = h = None
-    if nu >= 1:
-        g = bt[1][..., None] * tg
-    if nu >= 2:
-        h = bt[2][..., None, None] * tg[..., :, None] * tg[..., None, :] \
-            + bt[1][..., None, None] * th
-    return v, g, h
+def _triple(jet):
+    """A jet list as the (value, gradient, Hessian) triple with None for orders not asked."""
+    return tuple(jet) + (None,) * (3 - len(jet))
 
 
 class Metric:
@@ -110,10 +94,9 @@ class Metric:
         d, dg, dh = self.norm_jet(y, nu)
         R = np.asarray(R, dtype=float)
         t = d / R
-        bt = bump_from_t(t, kernel, nu)
-        tg = dg / R[..., None] if nu >= 1 else None
-        th = dh / R[..., None, None] if nu >= 2 else None
-        return chain_jet(bt, tg, th, nu)
+        t_jet = [t, dg / R[..., None] if nu >= 1 else None,
+                 dh / R[..., None, None] if nu >= 2 else None]
+        return _triple(chain_jet(bump_derivs(kernel, t, nu), t_jet, nu))
 
     def coord_bound(self, R):
         return np.asarray(R, float)[..., None] / self.w
@@ -222,7 +205,7 @@ class _Tensor(Metric):
         R = np.asarray(R, dtype=float)
         u = (y * self.w) @ self.A.T / R[..., None]             # (..., m)
         Aw = self.A * self.w                                      # du/dy = Aw / R
-        bt = bump_from_t(np.abs(u), kernel, nu)
+        bt = bump_derivs(kernel, np.abs(u), nu)
         s = np.sign(u)
         f = [bt[0]]
         if nu >= 1:

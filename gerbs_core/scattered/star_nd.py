@@ -42,7 +42,7 @@ import numpy as np
 from scipy.spatial import Delaunay, QhullError
 
 from ..errors import InvalidParameterError, InvalidPointSetError
-from .metrics import bump_from_t, chain_jet
+from ..gauge.jet import bump_derivs, chain_jet
 from .partition import jmul, jsum, normalize
 
 __all__ = ["DelaunayStarCover", "default_kappa"]
@@ -312,8 +312,7 @@ class DelaunayStarCover:
         y = np.where(at_centre[:, None], 1.0, y)              # any direction: masked below
         g = list(self.gauge_jet(y, v, nu))
         g[0] = np.where(at_centre, 0.0, g[0])
-        bt = bump_from_t(g[0], self.kernel, nu)
-        jet = chain_jet(bt, g[1], g[2], nu)
+        jet = chain_jet(bump_derivs(self.kernel, g[0], nu), g, nu)
         for i in range(nu + 1):
             val = jet[i]
             if i:

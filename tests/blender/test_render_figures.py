@@ -57,7 +57,7 @@ def test_zebra_pairs_are_side_by_side_and_differ(rendered):
     by 4 px gaps: one row for zebra_subsurf, two (full view, close-up) for zebra_kinked;
     the two renders of every row differ."""
     out, _ = rendered
-    for name, rows in (("zebra_subsurf", 1), ("zebra_kinked", 2)):
+    for name, rows in (("zebra_subsurf", 1), ("zebra_kinked", 2), ("zebra_crease", 1)):
         img = matplotlib_image.imread(str(out / f"{name}.png"))[..., :3].astype(np.float64)
         h, w = img.shape[:2]
         side = (w - 4) // 2

@@ -42,8 +42,9 @@ def _wavy(mesh):
 
 
 def _spokes(s):
-    """(a, corner on the start side, corner on the other side, chart point of b)."""
-    T, ch = s.topology, s.charts
+    """(a, corner on the start side, corner on the other side, chart point of b); with
+    creases the spokes of the cut mesh (those not on a crease)."""
+    T, ch = s.model.topology, s.charts
     for c in np.flatnonzero(T.halfedge_twin >= 0):
         a = T.face_vertices[c]
         c2 = T.corner_next[T.halfedge_twin[c]]

@@ -1,0 +1,73 @@
+"""The command-line job with creases: --crease-angle and --sharp-creases (real bpy
+subprocesses, the style of test_scripts.py)."""
+import bpy
+import numpy as np
+import pytest
+
+from .helpers import positions
+from .test_scripts import ROOT, run
+
+pytestmark = pytest.mark.blender
+
+SCRIPT = ROOT / "scripts" / "gerbs_surface.py"
+
+
+def _cube_obj(path):
+    from gerbs_core.datasets.primitives import cube
+    V, F = cube()
+    lines = [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in V]
+    lines += ["f " + " ".join(str(i + 1) for i in f) for f in F]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _cube_distance(S, h=1.0):
+    inside = np.minimum(np.abs(S + h), np.abs(S - h)).min(axis=1)
+    outside = np.linalg.norm(np.maximum(np.abs(S) - h, 0.0), axis=1)
+    return np.where(outside > 0, outside, inside)
+
+
+def _result(path):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.wm.obj_import(filepath=str(path))
+    (obj,) = bpy.context.selected_objects
+    return positions(obj.data)
+
+
+def test_crease_angle_keeps_the_cube_a_cube(blender, tmp_path):
+    src = _cube_obj(tmp_path / "cube.obj")
+    out = run([SCRIPT, src, "-o", tmp_path / "c.obj", "--resolution", "4",
+               "--crease-angle", "60"], cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "12 edges creased" in out.stderr
+    P = _result(tmp_path / "c.obj")
+    print(f"--crease-angle 60: {len(P)} points, max distance to the cube "
+          f"{_cube_distance(P).max():.1e}")
+    assert len(P) > 8 and _cube_distance(P).max() <= 1e-5
+    # above the cube's 90 degrees nothing is creased: the cube is rounded
+    out = run([SCRIPT, src, "-o", tmp_path / "r.obj", "--resolution", "4", "--quiet",
+               "--crease-angle", "120"], cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert _cube_distance(_result(tmp_path / "r.obj")).max() > 0.05
+
+
+def test_sharp_creases_from_the_importers_sharp_edges(blender, tmp_path):
+    """Blender's OBJ importer marks edges sharp between faces of different smoothing groups
+    or with split normals; a cube written by Blender (flat faces) comes back all sharp."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.mesh.primitive_cube_add(size=2.0)
+    bpy.ops.wm.obj_export(filepath=str(tmp_path / "b.obj"), export_materials=False)
+    out = run([SCRIPT, tmp_path / "b.obj", "-o", tmp_path / "s.obj", "--resolution", "3",
+               "--sharp-creases"], cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "12 edges creased" in out.stderr
+    assert _cube_distance(_result(tmp_path / "s.obj")).max() <= 1e-5
+
+
+@pytest.mark.parametrize("value", ["-5", "200", "nan"])
+def test_bad_crease_angle_is_one_error_line(tmp_path, value):
+    src = _cube_obj(tmp_path / "cube.obj")
+    out = run([SCRIPT, src, "-o", tmp_path / "x.obj", "--crease-angle", value], cwd=tmp_path)
+    assert out.returncode == 2
+    assert out.stderr.strip().splitlines()[-1].startswith("error: --crease-angle")
+    assert not (tmp_path / "x.obj").exists()
