@@ -23,6 +23,12 @@ bl_info = {  # legacy add-on metadata (the extension uses blender_manifest.toml)
     "category": "Mesh",
 }
 
+import atexit
+import logging
+
+log = logging.getLogger(__name__)
+
+
 def _modules():
     from . import handlers, panels, properties
     return properties, panels, handlers
@@ -68,9 +74,28 @@ def _clear() -> None:
     engine.clear_caches()
 
 
+def _at_exit() -> None:
+    """Unregister when Python exits with the add-on registered (the bpy module only:
+    see compat.at_exit; the Blender application disables add-ons itself)."""
+    unregister()
+
+
+def _report_limitations() -> None:
+    """Say once, in the log, what this Blender cannot do (older Blender, no scipy)."""
+    from . import compat
+    from .core import scipy_problem
+
+    for text in compat.limitations():
+        log.info("GERBS: %s", text)
+    if problem := scipy_problem():
+        log.warning("GERBS: %s", problem)
+
+
 def register() -> None:
     """Register classes, the menu entry and the handlers. Idempotent."""
     import bpy
+
+    from . import compat
 
     _clear()
     properties, panels, handlers = _modules()
@@ -80,9 +105,14 @@ def register() -> None:
     panels.register()
     handlers.register()
     handlers.resync_all()  # catch up with edits made while unregistered
+    atexit.unregister(_at_exit)
+    if compat.at_exit():
+        atexit.register(_at_exit)
+    _report_limitations()
 
 
 def unregister() -> None:
     """Undo register() (a no-op if not registered); objects keep their modifiers
     and show their last surface."""
+    atexit.unregister(_at_exit)
     _clear()

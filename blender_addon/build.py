@@ -46,7 +46,12 @@ class Built:
 def build_surface(settings: dict, inp, resolution: int, progress, creases=None) -> Built:
     """The surface of `inp` with `settings` at `resolution` (raises GERBSError);
     `creases`: :class:`blender_addon.creases.Creases` (None: none)."""
-    from gerbs_core.mesh.surface import BlendingSurface
+    from .core import module, scipy_problem
+    from .errors import MissingDependencyError
+
+    if problem := scipy_problem():  # a message in the panel and status bar, not a traceback
+        raise MissingDependencyError(problem)
+    BlendingSurface = module("mesh.surface").BlendingSurface
 
     args = settings_mod.core_arguments(settings)
     X = inp.positions.astype(np.float64)

@@ -225,7 +225,7 @@ def _new_layers(obj, mod, depsgraph, inp, normals):
 
 
 def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
-    from gerbs_core.errors import GERBSValueError
+    from .errors import GERBSValueError
 
     render = depsgraph.mode == "RENDER"
     key = state_key(obj, mod, render)
@@ -311,7 +311,7 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
 def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
     """A full build at ``build = (resolution, creases)`` into result `res`."""
     resolution, crz = build
-    from gerbs_core.errors import GERBSError, InvalidMeshError
+    from .errors import GERBSError, InvalidMeshError
 
     key = state_key(obj, mod, render)
     X = inp.positions.astype(np.float64)

@@ -6,7 +6,13 @@ input are also ``ValueError`` (like the core's), as before.
 """
 from __future__ import annotations
 
-from gerbs_core.errors import GERBSError, GERBSValueError, InvalidMeshError, ResourceLimitError
+from .core import module as _core_module
+
+_core_errors = _core_module("errors")
+GERBSError = _core_errors.GERBSError
+GERBSValueError = _core_errors.GERBSValueError
+InvalidMeshError = _core_errors.InvalidMeshError
+ResourceLimitError = _core_errors.ResourceLimitError
 
 PREFIX = "GERBS: "
 
@@ -17,6 +23,10 @@ class GERBSSyncError(GERBSValueError):
 
 class NoModifierError(GERBSError, LookupError):
     """The object has no GERBS Blending Surface modifier (or is not a mesh object)."""
+
+
+class MissingDependencyError(GERBSError, ImportError):
+    """The core cannot run in this Blender: scipy is not importable (see core.scipy_problem)."""
 
 
 class OperationError(GERBSError, RuntimeError):

@@ -1,10 +1,12 @@
 """A small builder for the add-on's Geometry Nodes tree: nodes, links, comparisons,
 samples and repeat zones, found by socket identifier (node_tree.py uses it).
 
-Node types missing in older Blender (the Warning node before 4.3) are skipped by
-:meth:`Tree.node`, which returns None for them.
+Node types missing in older Blender (the Warning node before 4.3, see :mod:`compat`)
+are skipped by :meth:`Tree.node`, which returns None for them.
 """
 from __future__ import annotations
+
+from . import compat
 
 
 class Tree:
@@ -159,9 +161,9 @@ class Tree:
 
     def warning(self, show, message, kind):
         """A node warning shown while `show` is True; returns `show` passed through it."""
-        node = self.node("GeometryNodeWarning", warning_type=kind)
-        if node is None:
+        if not compat.has_node_type(compat.WARNING_NODE):  # Blender 4.2 (see compat)
             return show
+        node = self.node(compat.WARNING_NODE, warning_type=kind)
         self.link(show, node.inputs["Show"])
         self.feed(node.inputs["Message"], message)
         return node.outputs["Show"]

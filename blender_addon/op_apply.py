@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import bpy
 
-from gerbs_core.errors import GERBSError
+from .errors import GERBSError
 
 from . import api, ids
 

@@ -28,9 +28,9 @@ _SPECS = {s.key: s for s in ids.SETTINGS}
 
 
 def _error(key: str, message: str):
-    from gerbs_core.errors import InvalidParameterError
+    from .core import module
 
-    return InvalidParameterError(key, message)
+    return module("errors").InvalidParameterError(key, message)
 
 
 def _menu(spec, value):
@@ -107,8 +107,11 @@ class CoreArguments:
 
 def core_arguments(settings: dict) -> CoreArguments:
     """The one mapping from (validated, full) add-on settings to gerbs_core arguments."""
-    from gerbs_core.kernels import BFBS, ERBS, Affine, LogisticStep
+    from .core import module
 
+    kernels_mod = module("kernels")
+    BFBS, ERBS, Affine, LogisticStep = (kernels_mod.BFBS, kernels_mod.ERBS, kernels_mod.Affine,
+                                        kernels_mod.LogisticStep)
     kernels = {
         "erbs": lambda s: ERBS(alpha=s["alpha"], beta=s["beta"], gamma=s["gamma"],
                                lam=s["lam"], sigma=s["sigma"]),

@@ -10,6 +10,9 @@ Blender figures (real ``bpy``, Cycles on the CPU; OpenImageDenoise when samples 
                                 mesh edges drawn on the surface; second row: close-ups
   zebra_crease                  reflection lines: GERBS with one edge loop fully creased |
                                 the same mesh without creases
+  zebra_peers_suzanne, zebra_peers_torus, zebra_peers_cylinder
+                                reflection lines: GERBS | Modified Butterfly (MeshLab, pymeshlab)
+                                | Catmull-Clark (Subdivision Surface), matched output density
 Plots (matplotlib, Agg; the optional ``docs`` extra):
   kernels                       F and b of ERBS (several parameter sets), BFBS, logistic, affine, step
   partition                     partition of unity Psi_i on a Delaunay star-1 cover
@@ -17,7 +20,9 @@ Plots (matplotlib, Agg; the optional ``docs`` extra):
 
 ``--quick`` lowers tessellation resolutions and point counts (used by the test).
 Every figure is built from gerbs_core objects (and scripts/bench_scattered.py for the
-convergence plot); nothing is precomputed. About 3-4 minutes on 2 cores at the defaults.
+convergence plot); nothing is precomputed. About 3-4 minutes on 2 cores at the defaults,
+plus about a minute per zebra_peers figure at the README's ``--size 600x400 --samples 8``
+(they also need pymeshlab, the benchmark dependency, for Modified Butterfly).
 """
 from __future__ import annotations
 
@@ -37,7 +42,8 @@ import numpy as np  # noqa: E402
 from figures import gerbs  # noqa: E402
 
 BLENDER_FIGURES = ("suzanne", "icosphere", "mixed", "zebra_subsurf", "zebra_kinked",
-                   "zebra_crease")
+                   "zebra_crease",
+                   "zebra_peers_suzanne", "zebra_peers_torus", "zebra_peers_cylinder")
 PLOT_FIGURES = ("kernels", "partition", "convergence")
 ALL_FIGURES = BLENDER_FIGURES + PLOT_FIGURES
 
@@ -103,6 +109,27 @@ def _creased_sphere():
 
 
 CREASE_SCENE = dict(mesh=_creased_sphere, view=(0.9, -1.5, 0.5), stripes=14.0, resolution=(24, 6))
+
+def _torus():
+    from gerbs_core.datasets.primitives import torus
+
+    return torus(24, 16, 1.0, 0.4)
+
+
+def _cylinder():
+    from gerbs_core.datasets.primitives import cylinder
+
+    return cylinder()
+
+
+# GERBS | Butterfly | Catmull-Clark, one camera: the peers at `level` steps (full, quick),
+# GERBS at the resolution whose output count is closest to theirs (figures/peers.py)
+PEER_SCENES = {
+    "zebra_peers_suzanne": dict(mesh=_suzanne, view=(0.45, -1.6, 0.45), stripes=12.0, zoom=0.88),
+    "zebra_peers_torus": dict(mesh=_torus, view=(0.5, -1.2, 1.3), stripes=12.0, zoom=0.95),
+    "zebra_peers_cylinder": dict(mesh=_cylinder, view=(0.9, -1.5, 1.0), stripes=10.0, zoom=0.9),
+}
+PEER_LEVEL = (3, 1)
 
 
 # ---------------------------------------------------------------- Blender figures
@@ -281,11 +308,33 @@ class Renderer:
                 spec["view"], center, radius, spec["stripes"]))
         return sc.save_png(sc.side_by_side(halves), self.out / f"{name}.png"), info
 
+    def zebra_peers(self, name: str):
+        """GERBS | Modified Butterfly | Catmull-Clark panels with one camera, lights and
+        stripe material, framed on the GERBS surface; captions carry the output counts."""
+        from figures import peers
+        from figures import scene as sc
+
+        spec = PEER_SCENES[name]
+        v, f = spec["mesh"]()
+        level = PEER_LEVEL[1 if self.quick else 0]
+        panels = peers.zebra_surfaces(v, f, level)
+        center, radius = sc.bounding_sphere(np.concatenate([p[1] for p in panels]))
+        radius *= spec["zoom"]  # the box's sphere is loose around the silhouette
+        images, info = [], {"level": level}
+        for k, (caption, pts, tris, nrm) in enumerate(panels):
+            make = lambda m, pts=pts, tris=tris, nrm=nrm: m.surface_object("Surface", pts, tris, nrm)  # noqa: E731
+            images.append(self._zebra_half(f"{name}_{k}", caption, make, spec["view"], center,
+                                           radius, spec["stripes"]))
+            info[caption.split(",")[0]] = len(pts)
+        return sc.save_png(sc.side_by_side(images), self.out / f"{name}.png"), info
+
     def render(self, name: str):
         if name in WIRE_SCENES:
             return self.wire_figure(name)
         if name == "zebra_crease":
             return self.crease_pair(name)
+        if name in PEER_SCENES:
+            return self.zebra_peers(name)
         return self.zebra_pair(name)
 
     def close(self):

@@ -52,19 +52,44 @@ def test_every_figure_is_a_non_uniform_png(rendered, name):
     assert len(np.unique((rgb * 255).round().reshape(-1, 3), axis=0)) > 4
 
 
-def test_zebra_pairs_are_side_by_side_and_differ(rendered):
-    """Each zebra image is a grid of square renders, two per row (GERBS | other), separated
-    by 4 px gaps: one row for zebra_subsurf, two (full view, close-up) for zebra_kinked;
-    the two renders of every row differ."""
+ZEBRA_GRIDS = (("zebra_subsurf", 1, 2), ("zebra_kinked", 2, 2), ("zebra_crease", 1, 2),
+               ("zebra_peers_suzanne", 1, 3),
+               ("zebra_peers_torus", 1, 3), ("zebra_peers_cylinder", 1, 3))
+
+
+@pytest.mark.parametrize("name, rows, cols", ZEBRA_GRIDS)
+def test_zebra_grids_are_side_by_side_and_differ(rendered, name, rows, cols):
+    """Each zebra image is a grid of square renders separated by 4 px gaps: GERBS | other
+    (one row for zebra_subsurf, two (full view, close-up) for zebra_kinked), GERBS |
+    Butterfly | Catmull-Clark for zebra_peers_*; the renders of every row differ
+    pairwise below the captions (on the torus GERBS and Butterfly are alike: a small
+    but non-zero difference; the same surface rendered twice gives 0 there)."""
     out, _ = rendered
-    for name, rows in (("zebra_subsurf", 1), ("zebra_kinked", 2), ("zebra_crease", 1)):
-        img = matplotlib_image.imread(str(out / f"{name}.png"))[..., :3].astype(np.float64)
-        h, w = img.shape[:2]
-        side = (w - 4) // 2
-        assert w == 2 * side + 4 and h == rows * side + 4 * (rows - 1), (name, img.shape)
-        for r in range(rows):
-            band = img[r * (side + 4):r * (side + 4) + side]
-            assert np.abs(band[:, :side] - band[:, side + 4:]).mean() > 0.01, (name, r)
+    img = matplotlib_image.imread(str(out / f"{name}.png"))[..., :3].astype(np.float64)
+    h, w = img.shape[:2]
+    side = (w - 4 * (cols - 1)) // cols
+    assert w == cols * side + 4 * (cols - 1) and h == rows * side + 4 * (rows - 1), img.shape
+    for r in range(rows):
+        band = img[r * (side + 4):r * (side + 4) + side]
+        panels = [band[side // 4:, c * (side + 4):c * (side + 4) + side] for c in range(cols)]
+        for a in range(cols):
+            for b in range(a + 1, cols):
+                assert np.abs(panels[a] - panels[b]).mean() > 0.002, (r, a, b)
+
+
+def test_peer_figures_match_gerbs_density_to_the_peers():
+    """zebra_peers_*: GERBS's resolution is the one whose output count is closest (in
+    log) to the peers' geometric mean; the cylinder's peers (Butterfly 3,970 points,
+    Catmull-Clark 3,074) give r = 7 (3,138 points), not 8 (4,098)."""
+    from figures import gerbs, peers
+    from gerbs_core.datasets.primitives import cylinder, torus
+
+    v, f = cylinder()
+    assert peers.matched_resolution(f, len(v), [3970, 3074]) == 7
+    assert peers.matched_resolution(f, len(v), [4098, 4098]) == 8
+    v, f = torus(24, 16)
+    n8 = gerbs.output_count(f, len(v), 8)
+    assert peers.matched_resolution(f, len(v), [n8 + 5, n8 - 5]) == 8
 
 
 def test_only_renders_the_named_figures(tmp_path):
