@@ -74,7 +74,7 @@ def gerbs_case(V, F, r, repeats, subsurf_build=None):
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     return dict(points=st.shape[0], build=tb, update=tu, mem=peak / 1e6,
-                nnz=st.nnz_per_row, eps0=s.last_eps0,
+                nnz=st.nnz_per_row(), eps0=s.eps0,
                 ss_build=statistics.median(tss) if tss else None)
 
 
@@ -145,12 +145,14 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--tables", action="store_true")
+    ap.add_argument("--quick", action="store_true", help="Suzanne at level 2 only (a smoke run)")
     args = ap.parse_args()
     try:
         import bpy  # noqa: F401
     except ImportError:
         bpy = None
-    meshes = {"suzanne": P.suzanne(), "icosphere(3)": P.icosphere(3), "grid 32x32": P.grid(32, 32)}
+    meshes = {"suzanne": P.suzanne(), "icosphere(3)": P.icosphere(3), "grid 32x32": P.grid(32, 32),
+              "grid 64x64": P.grid(64, 64)}
     print("build: BlendingSurface + stencil from scratch; update: W @ X; "
           "Subsurf (ss) at level L = log2 r")
     print(f"{'mesh':13} {'L/r':>4} {'points':>7} {'build s':>8} {'update ms':>9} "
@@ -158,7 +160,9 @@ def main():
           f"{'nnz/row':>7} {'eps0':>6} | {'ss points':>9} {'ss build s':>10} {'ss upd ms':>9} | "
           f"{'build x':>7} {'update x':>8}")
     for name, (V, F) in meshes.items():
-        for level in (2, 3, 4):
+        if args.quick and name != "suzanne":
+            continue
+        for level in ((2,) if args.quick else (2, 3) if name == "grid 64x64" else (2, 3, 4)):
             r = 2 ** level
             ss_build, b = (blender_case(bpy, V, F, level, args.repeats) if bpy is not None
                            else (None, None))

@@ -77,3 +77,16 @@ def test_main_job_messy_mesh_prints_warnings_and_exits_zero(tmp_path):
     assert "non_manifold_edge" in lines[0] and "edges (0, 1)" in lines[0]
     assert "non_manifold_vertex" in lines[1] and "vertex indices [0, 1]" in lines[1]
     assert (tmp_path / "o.obj").is_file()
+
+
+def test_bench_surface_quick_run_prints_a_row_with_matched_counts():
+    """scripts/bench_surface.py --quick (a smoke run of the benchmark, not a timing test):
+    one Suzanne row at level 2 / r = 4 whose GERBS and Subsurf counts are those of the
+    lattice and of Catmull-Clark level 2 (7,830 and 7,958 points)."""
+    out = subprocess.run([sys.executable, str(ROOT / "scripts" / "bench_surface.py"), "--quick",
+                          "--repeats", "1"], capture_output=True, text=True, timeout=600,
+                         env=dict(os.environ, OPENBLAS_NUM_THREADS="1"))
+    assert out.returncode == 0, out.stderr[-2000:]
+    rows = [line.split() for line in out.stdout.splitlines() if line.startswith("suzanne")]
+    assert len(rows) == 1 and rows[0][1] == "2/4" and rows[0][2] == "7830", out.stdout
+    assert "7958" in rows[0], out.stdout
