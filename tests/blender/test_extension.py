@@ -2,7 +2,7 @@
 Blender, carrying unmodified scipy wheels for Python 3.11 and 3.13 and the core as
 the add-on's own code; the Linux zip installed into a bare bpy 5.0.1 works.
 
-The zips are built offline from the wheel cache that ``.ci/run`` fills
+The zips are built offline from the wheel cache that ``scripts/install.sh`` fills
 (``build_extension.py fetch``); a missing cache fails with how to fill it.
 """
 from __future__ import annotations

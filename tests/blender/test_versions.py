@@ -1,7 +1,7 @@
 """The add-on on the oldest and newest supported Blender: bpy 4.2 LTS, 4.5 LTS and 5.0.
 
 Each check runs in a subprocess with that Blender's own interpreter
-(``.venvs/bpy42``, ``.venvs/bpy45``: installed by ``.ci/run``; 5.0.1 is this
+(``.venvs/bpy42``, ``.venvs/bpy45``: installed by ``scripts/install.sh``; 5.0.1 is this
 interpreter), importing this checkout's packages: the README's scripting
 snippet exactly as the README shows it, and the compat subset
 (``subprocess/compat_subset.py``: register, add the modifier, evaluate, apply,
@@ -40,7 +40,7 @@ def interpreter(version: str) -> str:
         return sys.executable
     python = VENVS[version] / "bin" / "python"
     if not python.exists():
-        pytest.fail(f"no bpy {version} interpreter at {python}: run .ci/run, or "
+        pytest.fail(f"no bpy {version} interpreter at {python}: run scripts/install.sh, or "
                     f"python3.11 -m venv {VENVS[version]} && {VENVS[version]}/bin/pip install "
                     f"'{INSTALL[version]}' 'numpy<2' scipy==1.17.1", pytrace=False)
     return str(python)
