@@ -39,8 +39,9 @@ def _operator_classes():
     from .op_apply import OBJECT_OT_gerbs_apply
     from .op_rebuild import OBJECT_OT_gerbs_rebuild
     from .op_remove import OBJECT_OT_gerbs_remove
+    from .op_select_problem import OBJECT_OT_gerbs_select_problem
     return (OBJECT_OT_gerbs_add_surface, OBJECT_OT_gerbs_apply,
-            OBJECT_OT_gerbs_rebuild, OBJECT_OT_gerbs_remove)
+            OBJECT_OT_gerbs_rebuild, OBJECT_OT_gerbs_remove, OBJECT_OT_gerbs_select_problem)
 
 
 def _clear() -> None:

@@ -10,8 +10,9 @@
 
 Settings (keywords, see ``ids.SETTINGS`` and ``settings.validate``): kernel
 ("erbs", "bfbs", "logistic", "affine"), alpha, beta, gamma, lam, sigma (ERBS),
-bfbs_left, bfbs_right, resolution (segments per edge, 1..64), boundary ("keep",
-"straighten"), use_normals, memory_budget (bytes).
+bfbs_left, bfbs_right, resolution (segments per edge in the viewport, Apply and
+exports, 1..64), render_resolution (in final renders), boundary ("keep",
+"straighten"), rest ("follow", "bound"), use_normals, memory_budget (bytes).
 
 Errors (all ``gerbs_core.errors.GERBSError``):
 
@@ -68,9 +69,12 @@ def add_surface(obj, *, progress=None, raise_errors: bool = True, **settings):
 
     Returns the modifier. Raises InvalidParameterError (nothing added) for a bad
     setting, ``GERBSSyncError`` naming the problem if the mesh is invalid (the
-    modifier stays, showing the error).
+    modifier stays, showing the error). Without ``render_resolution`` renders use
+    ``resolution``.
     """
     _mesh_object(obj)
+    if "resolution" in settings and "render_resolution" not in settings:
+        settings = {**settings, "render_resolution": settings["resolution"]}
     values = settings_mod.validate({**ids.DEFAULTS, **settings})
     mod = obj.modifiers.new(ids.MODIFIER_NAME, "NODES")
     mod.node_group = gn.ensure_group()
@@ -139,6 +143,7 @@ def status(obj, mod=None) -> dict:
     st = engine.get_state(obj, mod)
     out = {"error": gn.get_error(mod), "warning": gn.get_warning(mod)}
     if st is not None and not st.error:
-        out.update(points=st.n_points, triangles=st.n_triangles, warnings=st.warnings,
+        out.update(points=st.n_points, faces=st.n_faces, triangles=st.n_triangles,
+                   warnings=st.warnings,
                    build_seconds=st.build_seconds, update_seconds=st.update_seconds)
     return out

@@ -1,28 +1,42 @@
-"""Per-modifier caches and the sync step that keeps a result object up to date.
+"""Per-modifier caches and the sync step that keeps the result objects up to date.
 
-``sync(obj, mod, depsgraph)`` reads what the modifier receives (see
-:func:`read_input`) and compares it and the settings with what was last built:
+``sync(obj, mod, depsgraph)`` reads what the modifier receives (stack.read_input:
+positions, topology and everything it carries) and compares it and the settings
+with what was last built:
 
-* same topology and settings -> only the cached stencil applied to the new
+* nothing changed -> nothing is written (this is what stops the feedback loop
+  of the depsgraph handler: writing the result triggers another update);
+* only what it carries changed (UVs, weights, material indices, a new attribute) ->
+  the carried layers are mapped again with the build's maps (transfer.py), the
+  surface is not rebuilt;
+* same topology and settings, positions moved, with a linear update allowed (Rest
+  Shape Bound, or an Edit Mode drag) -> only the cached stencil applied to the new
   positions (every output coordinate is a fixed linear combination of the vertex
   positions for the rest shape bound at build time, kept until ``force=True``, the
-  "Rebuild" operator); when only a few vertices moved (a drag) just their
-  contribution is applied (``Stencil.apply_moved``), so the cost is local;
-* anything else -> a full rebuild through ``gerbs_core`` and a new result mesh;
-* nothing changed -> nothing is written (this is what stops the feedback loop
-  of the depsgraph handler: writing the result triggers another update).
+  "Rebuild" operator); when only a few vertices moved just their contribution
+  (``Stencil.apply_moved``), so the cost is local;
+* anything else -> a full rebuild through ``gerbs_core`` and a new result mesh.
 
-Every write stores the input it was built from on the result (mesh_io
-snapshot, and the settings on the modifier's "Built" inputs), which is what
-the node group checks before showing it.
+Every write stores the input it was built from on the result (snapshot.py), which
+is what the node group checks before showing it.
+
+Viewport and render: a depsgraph in RENDER mode (a final render's frame change)
+syncs the render result at the Render Resolution, from what the modifier receives
+in the render. It writes Blender data only where that is safe (background, or
+Render > Lock Interface on: a render's handlers run beside the interface);
+otherwise, and while its own result is not fresh, a render shows the viewport
+surface (node_tree.py). Errors of a render build are kept for the panel and do
+not touch the viewport.
 
 Invalid input never touches the base mesh: the core raises a
 ``GERBSValueError`` naming the problem and the indices, the message is put on
-the modifier (shown as its error, base mesh passed through) and returned.
+the modifier (shown as its error, base mesh passed through) and returned; the
+problem's elements are kept for the select operator.
 
 State is keyed by ``(object.session_uid, modifier.persistent_uid)`` (renaming a
-modifier or an object keeps it) and holds only numpy data, never bpy
-references, so undo and file loads cannot leave dangling pointers.
+modifier or an object keeps it; "render" appended for the render result) and
+holds only numpy data, never bpy references, so undo and file loads cannot leave
+dangling pointers.
 """
 from __future__ import annotations
 
@@ -36,8 +50,9 @@ import numpy as np
 
 from . import creases as creases_mod
 from . import geometry_nodes as gn
-from . import mesh_io, results
+from . import mesh_io, results, snapshot, stack
 from . import settings as settings_mod
+from .build import build_surface, write_carried, write_geometry
 from .errors import PREFIX, format_error, format_warnings
 from .progress import silent
 from .stencil_update import apply_stencil
@@ -47,20 +62,23 @@ log = logging.getLogger(__name__)
 
 @dataclass
 class SurfaceState:
-    """What was last built for one modifier (numpy only)."""
+    """What was last built for one result (numpy only)."""
 
     settings: tuple
     input: mesh_io.MeshInput
     positions: np.ndarray  # (V, 3) float64 of input.positions
     stencil: object = None  # gerbs_core.mesh.stencil.Stencil (P points from V positions)
     rest: np.ndarray | None = None  # (V, 3) the rest shape the stencil is bound to
-    triangles: np.ndarray | None = None  # (T, 3) int32 output triangles as written
+    transfer: object = None  # transfer.Transfer: the output's maps of carried layers
     points: np.ndarray | None = None  # (P, 3) float64 last output (for partial updates)
+    record: tuple = ()  # the settings record written with the result
     partial_updates: int = 0
     n_points: int = 0
-    n_triangles: int = 0
+    n_faces: int = 0  # output faces (quads in quad faces, triangles elsewhere)
+    n_triangles: int = 0  # triangles of the same surface triangulated (e.g. as exported)
     result_uid: int = -1
     error: str = ""
+    problem: object = None  # the InvalidMeshError behind `error` (select operator)
     build_seconds: float = 0.0
     update_seconds: float = 0.0
     warnings: tuple = ()  # gerbs_core.mesh.repair.MeshWarning of the last build
@@ -71,6 +89,7 @@ class SyncResult:
     status: str  # "unchanged" | "updated" | "rebuilt" | "error"
     message: str = ""
     rebind: bool = False  # a linear preview of a Follow surface: rebuild when edits settle
+    retry: bool = False  # the node group was made to pass its input on: sync again soon
 
 
 def dragging(obj) -> bool:
@@ -83,12 +102,13 @@ _states: dict[tuple, SurfaceState] = {}
 stats: Counter = Counter()  # how often each SyncResult status occurred (tests, panel)
 
 
-def state_key(obj, mod) -> tuple:
-    return (obj.session_uid, getattr(mod, "persistent_uid", mod.name))  # (name before 4.2)
+def state_key(obj, mod, render: bool = False) -> tuple:
+    key = (obj.session_uid, getattr(mod, "persistent_uid", mod.name))  # (name before 4.2)
+    return key + ("render",) if render else key
 
 
-def get_state(obj, mod) -> SurfaceState | None:
-    return _states.get(state_key(obj, mod))
+def get_state(obj, mod, render: bool = False) -> SurfaceState | None:
+    return _states.get(state_key(obj, mod, render))
 
 
 def known(obj) -> bool:
@@ -104,8 +124,8 @@ def clear_caches() -> None:
 
 
 def prune(alive_keys) -> None:
-    """Drop the states of modifiers that no longer exist."""
-    for key in [k for k in _states if k not in alive_keys]:
+    """Drop the states of modifiers that no longer exist (render states with them)."""
+    for key in [k for k in _states if k[:2] not in alive_keys]:
         del _states[key]
 
 
@@ -115,18 +135,13 @@ def set_error(obj, mod, message: str, warning: str = "") -> None:
         obj.update_tag()  # re-evaluate: the Switch node shows the base mesh or the surface
 
 
-def _fail(obj, mod, key, st, message, progress) -> SyncResult:
-    st.error, st.stencil = message, None
+def _fail(obj, mod, key, st, message, progress, problem=None, render=False) -> SyncResult:
+    st.error, st.stencil, st.problem = message, None, problem
     _states[key] = st
-    set_error(obj, mod, message)
+    if not render:  # the Error input is shared: a render's failure must not hide the viewport
+        set_error(obj, mod, message)
     progress(1.0, "error")
     return SyncResult("error", message)
-
-
-# --- what the modifier receives -------------------------------------------------
-
-def _enabled(mod, edit: bool) -> bool:
-    return mod.show_viewport and (not edit or mod.show_in_editmode)
 
 
 def is_active(obj, mod) -> bool:
@@ -135,66 +150,27 @@ def is_active(obj, mod) -> bool:
     return (mod.show_viewport or mod.show_render) and (not edit or mod.show_in_editmode)
 
 
-def _final_mesh_is_result(final, res, depsgraph) -> bool:
-    """Does the evaluated object show the result (rather than its input)?"""
-    if res is None:
-        return False
-    mesh = res.evaluated_get(depsgraph).data
-    if (len(final.vertices), len(final.loops), len(final.polygons)) != \
-            (len(mesh.vertices), len(mesh.loops), len(mesh.polygons)):
-        return False
-    return (np.array_equal(mesh_io.read_positions(final), mesh_io.read_positions(mesh))
-            and np.array_equal(mesh_io.read_topology(final)[1], mesh_io.read_topology(mesh)[1]))
-
-
-def read_input(obj, mod, depsgraph, res, normals: bool):
-    """What `mod` receives now, read without touching the user's mesh.
-
-    Returns ``(MeshInput, "")``, ``(None, "")`` when the modifier shows the
-    result (so it receives exactly the result's snapshot), or ``(None, message)``.
-
-    If no enabled modifier follows `mod`, the evaluated object's final mesh is
-    either the result or, while the result is stale, exactly the modifier's
-    input (the node group passes it through), including shape keys, animation
-    and modifiers above. Otherwise the evaluated copy of the mesh data-block is
-    read, which is only the modifier's input when nothing above it changes the
-    mesh. In Edit Mode the final mesh is read through ``to_mesh`` (the
-    evaluated object's data is the edit cage there).
-    """
-    edit = obj.mode == "EDIT"
-    mods = list(obj.modifiers)
-    after = [m for m in mods[mods.index(mod) + 1:] if _enabled(m, edit)]
-    obj_eval = obj.evaluated_get(depsgraph)
-    if not after and obj_eval.is_evaluated:
-        final = obj_eval.to_mesh() if edit else obj_eval.data
-        try:
-            if _final_mesh_is_result(final, res, depsgraph):
-                return None, ""
-            return mesh_io.read_mesh(final, normals), ""
-        finally:
-            if edit:
-                obj_eval.to_mesh_clear()
-    before = [m for m in mods[:mods.index(mod)] if _enabled(m, edit)]
-    keys = obj.data.shape_keys
-    if before or (keys is not None and len(keys.key_blocks) > 1):
-        names = ", ".join(m.name for m in after)
-        return None, (f"{PREFIX}modifiers after it ({names}) hide what it receives: move it "
-                      f"last in the stack to use shape keys or the modifiers above it")
-    if edit:
-        return mesh_io.read_edit_mesh(obj.data, normals), ""
-    return mesh_io.read_mesh(obj.data.evaluated_get(depsgraph), normals), ""
+def may_write(depsgraph) -> bool:
+    """May a sync for `depsgraph` write Blender data? Not from a render that runs beside
+    the interface (its handlers run in the render thread)."""
+    if depsgraph.mode != "RENDER" or bpy.app.background:
+        return True
+    return bool(depsgraph.scene.render.use_lock_interface)
 
 
 # --- sync -------------------------------------------------------------------------
 
 def sync(obj, mod, depsgraph, *, force: bool = False, progress=None) -> SyncResult:
-    """Bring `mod`'s result object up to date with what it receives and its settings.
+    """Bring `mod`'s result object up to date with what it receives and its settings
+    (the render result for a RENDER depsgraph).
 
     `depsgraph`: an evaluated depsgraph containing `obj` (the handler's, or
     ``bpy.context.evaluated_depsgraph_get()``). `progress(fraction, message)` is
     called at a few stages of a rebuild. Raises nothing for bad input: errors
     are returned and shown on the modifier.
     """
+    if not may_write(depsgraph):
+        return SyncResult("unchanged")
     result = _sync(obj, mod, depsgraph, force, progress or silent)
     stats[result.status] += 1
     return result
@@ -210,127 +186,173 @@ def _alive(key) -> bool:
     return key in _states
 
 
+def _build_key(settings: dict, resolution: int) -> tuple:
+    """What a build depends on (one of the two resolutions: the one it is for)."""
+    rest = {k: v for k, v in settings.items() if k not in ("resolution", "render_resolution")}
+    return settings_mod.settings_key({**rest, "resolution": resolution})
+
+
+def _counts(mesh) -> tuple:
+    return len(mesh.vertices), len(mesh.polygons), len(mesh.loops)
+
+
+def _fresh_input(obj, mod, depsgraph, res, render, settings):
+    """The input while the node group shows a result: that result's record. None when a
+    render shows the viewport surface and may keep it (same resolution)."""
+    shown = res
+    if render:
+        final = obj.evaluated_get(depsgraph).data
+        if _counts(final) != _counts(res.evaluated_get(depsgraph).data):  # the viewport one
+            if settings["render_resolution"] == settings["resolution"]:
+                return None
+            shown = gn.get_result(mod) or res
+    return snapshot.read_snapshot(shown.evaluated_get(depsgraph).data, gn.get_names(mod))
+
+
+def _new_layers(obj, mod, depsgraph, inp, normals):
+    """`inp` with the layers the mesh data-block gained since its record (the node group
+    cannot see new names). (input, retry): `retry` when they can only be read from
+    what the stack delivers, so the node group has been made to pass it on."""
+    names = {layer.name for layer in inp.carried.layers}
+    if stack.base_names(obj, depsgraph) <= names:
+        return inp, False
+    st = stack.stack_of(obj, mod, depsgraph.mode == "RENDER")
+    if not st.above:  # the data-block's attributes are what the modifier receives
+        return inp.with_carried(stack.read_base(obj, depsgraph, normals, carried_only=True)), False
+    if gn.set_names(mod, ""):  # no layer fits: every result is stale until the next sync
+        obj.update_tag()
+    return inp, True
+
+
 def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     from .errors import GERBSValueError
 
-    key = state_key(obj, mod)
+    render = depsgraph.mode == "RENDER"
+    key = state_key(obj, mod, render)
     st = _states.get(key)
     t0 = time.perf_counter()
-    res, new = results.ensure_result(obj, mod, key, _alive)
+    res, new = results.ensure_result(obj, mod, key, _alive, render)
     blank = SurfaceState(settings=(), input=None, positions=None, result_uid=res.session_uid)
     try:
         settings = gn.read_settings(_evaluated_modifier(obj, mod, depsgraph))
     except GERBSValueError as exc:
-        return _fail(obj, mod, key, blank, format_error(exc), progress)
-    skey = settings_mod.settings_key(settings)
-    inp, problem = read_input(obj, mod, depsgraph, None if new else res, settings["use_normals"])
+        return _fail(obj, mod, key, blank, format_error(exc), progress, render=render)
+    if not render and settings["render_resolution"] != settings["resolution"]:
+        results.ensure_result(obj, mod, state_key(obj, mod, True), _alive, render=True)
+    resolution = settings["render_resolution" if render else "resolution"]
+    skey = _build_key(settings, resolution)
+    view = _states.get(state_key(obj, mod))
+    known_input = (st or view).input if (st or view) is not None else None
+    inp, problem = stack.read_input(obj, mod, depsgraph, settings["use_normals"], known_input)
     if problem:
-        return _fail(obj, mod, key, blank, problem, progress)
-    if inp is None:  # the result is shown, so it is fresh: its snapshot is the input
-        inp = mesh_io.read_snapshot(res.evaluated_get(depsgraph).data)
-    # creases (blender_addon/creases.py): in the settings key, so a crease change rebuilds
-    crz = creases_mod.read(obj, depsgraph, len(inp.positions)) if inp is not None else \
-        creases_mod.NONE
+        return _fail(obj, mod, key, blank, problem, progress, render=render)
+    retry = False
+    if inp is stack.FRESH:
+        inp = _fresh_input(obj, mod, depsgraph, res, render, settings)
+        if inp is None and render:
+            return SyncResult("unchanged")
+        if inp is not None:
+            inp, retry = _new_layers(obj, mod, depsgraph, inp, settings["use_normals"])
+    elif inp is None:
+        return SyncResult("unchanged")  # not evaluated in this depsgraph
+    if inp is None:
+        return _fail(obj, mod, key, blank, f"{PREFIX}internal error: the result shown "
+                     f"carries no record of its input", progress, render=render)
+    if force and not render:
+        _states.pop(state_key(obj, mod, True), None)  # renders rebuild too
+    # creases (blender_addon/creases.py) from what the modifier receives: in the settings
+    # key, so a crease change rebuilds
+    crz = creases_mod.from_carried(inp.carried)
     skey = skey + (("creases", crz.key),)
     _copy_materials(obj.data, res.data)
-    same = (not force and st is not None and inp is not None and st.settings == skey
+    outcome = _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0)
+    if outcome is None:
+        outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz), progress, t0,
+                           render)
+    return SyncResult(outcome.status, outcome.message, outcome.rebind, retry) if retry else outcome
+
+
+def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
+    """The cheap outcomes (unchanged, carried layers only, linear positions), or None."""
+    same = (not force and st is not None and st.settings == skey
             and st.result_uid == res.session_uid and st.input is not None)
+    if not same:
+        return None
     linear = settings["rest"] == "bound" or dragging(obj)
-    if same and st.input.same(inp) and (linear or st.rest is None
-                                        or np.array_equal(st.rest, st.positions)):
+    settled = linear or st.rest is None or np.array_equal(st.rest, st.positions)
+    if st.input.same(inp) and settled:
         return SyncResult("error", st.error) if st.error else SyncResult("unchanged")
-    if (same and linear and not st.error and st.stencil is not None
-            and st.input.same_topology(inp) and np.array_equal(st.input.materials, inp.materials)
+    if st.error or st.transfer is None:
+        return None
+    carried_same = (np.array_equal(st.input.materials, inp.materials)
+                    and inp.carried.same(st.input.carried))
+    if st.input.same_geometry(inp) and settled:  # only what it carries changed
+        write_carried(res, mod, st.transfer, inp, st.record)
+        st.input = inp
+        st.update_seconds = time.perf_counter() - t0
+        obj.update_tag()
+        return SyncResult("updated")
+    if (linear and st.stencil is not None and st.input.same_topology(inp)
             and len(res.data.vertices) == st.n_points and np.all(np.isfinite(inp.positions))):
         X = inp.positions.astype(np.float64)
-        mesh_io.write_snapshot(res.data, inp, positions_only=True)
+        if carried_same:
+            snapshot.write_positions(res.data, inp)
+        else:
+            write_carried(res, mod, st.transfer, inp, st.record)
         mesh_io.write_positions(res.data, apply_stencil(st, X))  # (tags the mesh)
         st.input, st.positions = inp, X
         st.update_seconds = time.perf_counter() - t0
         # Follow: the linear update is a preview; the surface of the current mesh is
         # rebuilt when the drag pauses (handlers.settle) or Edit Mode is left
         return SyncResult("updated", rebind=settings["rest"] == "follow")
-    if inp is None:
-        return _fail(obj, mod, key, blank, f"{PREFIX}internal error: the result shown "
-                     f"carries no record of its input", progress)
-    return _rebuild(obj, mod, res, settings, skey, inp, progress, t0, crz)
+    return None
 
 
-def _build(settings, inp, progress, crz=creases_mod.NONE):
-    """(points (P, 3), triangles (T, 3), stencil or None, lattice or None, surface)."""
-    from .core import module, scipy_problem
-    from .errors import MissingDependencyError
+def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
+    """A full build at ``build = (resolution, creases)`` into result `res`."""
+    resolution, crz = build
+    from .errors import GERBSError, InvalidMeshError
 
-    if problem := scipy_problem():  # a message in the panel and status bar, not a traceback
-        raise MissingDependencyError(problem)
-    BlendingSurface = module("mesh.surface").BlendingSurface
-    args = settings_mod.core_arguments(settings)
-    X = inp.positions.astype(np.float64)
-    normals = None if inp.normals is None else inp.normals.astype(np.float64)
-    progress(0.05, "building surface")
-    surface = BlendingSurface(X, inp.faces(), kernel=args.kernel, normals=normals, **args.surface,
-                              **crz.core_arguments())  # creases: blender_addon/creases.py
-    if normals is not None:  # Hermite normals: not W @ X (the core refuses a stencil)
-        progress(0.35, "evaluating surface")
-        P, triangles, _ = surface.tessellate(args.resolution)
-        return P, triangles, None, None, surface
-    progress(0.35, "building stencil")
-    stencil = surface.stencil(args.resolution)
-    return stencil.apply(X), stencil.triangles, stencil, stencil.lattice, surface
-
-
-def _rebuild(obj, mod, res, settings, skey, inp, progress, t0, crz=creases_mod.NONE):
-    from .errors import GERBSError
-
-    key = state_key(obj, mod)
+    key = state_key(obj, mod, render)
     X = inp.positions.astype(np.float64)
     st = SurfaceState(settings=skey, input=inp, positions=X, rest=X, result_uid=res.session_uid)
     try:
-        P, triangles, st.stencil, lattice, surface = _build(settings, inp, progress, crz)
+        built = build_surface(settings, inp, resolution, progress, crz)
     except GERBSError as exc:
-        return _fail(obj, mod, key, st, format_error(exc), progress)
+        return _fail(obj, mod, key, st, format_error(exc), progress,
+                     problem=exc if isinstance(exc, InvalidMeshError) else None, render=render)
     except Exception as exc:  # a defect of the core must not reach Blender raw
         log.exception("GERBS: surface build failed for %s", obj.name)
-        return _fail(obj, mod, key, st, format_error(exc), progress)
+        return _fail(obj, mod, key, st, format_error(exc), progress, render=render)
     progress(0.8, "writing result mesh")
+    P = built.points
     if not np.all(np.isfinite(P)):
         bad = np.flatnonzero(~np.all(np.isfinite(P), axis=1))
         return _fail(obj, mod, key, st, (
             f"{PREFIX}internal error: the surface is not finite at {len(bad)} output points "
-            f"(first {bad[:5].tolist()}); base mesh left as is"), progress)
-    if len(P) < len(X) or len(triangles) < len(inp.offsets) - 1:  # the snapshot must fit
+            f"(first {bad[:5].tolist()}); base mesh left as is"), progress, render=render)
+    prev = _states.get(key)
+    previous = prev.transfer if prev is not None and prev.result_uid == st.result_uid else None
+    st.transfer = write_geometry(res.data, built, previous, inp)
+    misfit = snapshot.misfit(res.data, inp)
+    if misfit:  # the record of the input must fit on the output
         return _fail(obj, mod, key, st, (
-            f"{PREFIX}resolution {settings['resolution']} gives fewer output points or "
-            f"triangles than the mesh has vertices or faces (loose or merged ones); raise "
-            f"the resolution"), progress)
-    st.points, st.triangles = P, np.asarray(triangles, dtype=np.int32)
-    st.warnings = surface.warnings
+            f"{PREFIX}resolution {resolution} gives fewer output {misfit} than the mesh has "
+            f"(loose or merged ones); raise the resolution"), progress, render=render)
+    st.stencil, st.points, st.warnings = built.stencil, P, built.surface.warnings
     for warning in st.warnings:
         log.warning("GERBS: %s: %s", obj.name, warning.message)
-    _write_result(res.data, st, _states.get(key), lattice, surface, settings, inp)
-    gn.write_built(mod, settings)
-    st.n_points, st.n_triangles = len(P), len(st.triangles)
+    st.record = gn.settings_record(settings, resolution)
+    write_carried(res, mod, st.transfer, inp, st.record)
+    st.n_points, st.n_faces = len(P), st.transfer.n_faces
+    st.n_triangles = built.lattice.n_triangles
     st.build_seconds = time.perf_counter() - t0
     _states[key] = st
-    set_error(obj, mod, "", format_warnings(st.warnings))
+    if not render:
+        set_error(obj, mod, "", format_warnings(st.warnings))
     obj.update_tag()
     progress(1.0, "done")
     return SyncResult("rebuilt")
-
-
-def _write_result(mesh, st, prev, lattice, surface, settings, inp) -> None:
-    if (prev is not None and prev.triangles is not None and prev.result_uid == st.result_uid
-            and len(mesh.vertices) == len(st.points)
-            and np.array_equal(prev.triangles, st.triangles)):
-        mesh_io.write_positions(mesh, st.points)  # e.g. a new kernel: same output topology
-    else:  # edges from the lattice structure where it has them (no hashing in Blender)
-        mesh_io.write_surface(mesh, st.points, st.triangles,
-                              edges=lattice.edges() if lattice is not None else None)
-    if len(mesh.materials) > 1:  # per-triangle material of the face it tessellates
-        lattice = lattice or surface.lattice(settings["resolution"])
-        faces = surface.face_map[lattice.triangle_face]  # the input face of each triangle
-        mesh_io.write_material_indices(mesh, inp.materials[faces])
-    mesh_io.write_snapshot(mesh, inp)
 
 
 def _copy_materials(base, result) -> None:
@@ -352,6 +374,7 @@ def sync_object(obj, depsgraph, *, force=False, progress=None) -> list[SyncResul
     out = [sync(obj, mods[0], depsgraph, force=force, progress=progress)] if mods else []
     for mod in mods[1:]:
         message = f"{PREFIX}one GERBS Blending Surface modifier per object; this one is ignored"
-        set_error(obj, mod, message)
+        if may_write(depsgraph):
+            set_error(obj, mod, message)
         out.append(SyncResult("error", message))
     return out

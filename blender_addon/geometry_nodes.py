@@ -4,19 +4,20 @@ Why this route (DESIGN section 7). Blender has no Python API for new modifier
 types; a Geometry Nodes modifier is the one modifier Python can define. One
 group (built by :mod:`node_tree`) serves every object:
 
-* the settings (kernel, kernel parameters, resolution, boundary rule, normals,
-  memory budget) are group inputs, so they live on the
-  modifier (``mod["Socket_N"]``), show in its panel, are animatable and saved
-  in the .blend;
+* the settings (kernel, kernel parameters, viewport and render resolution,
+  boundary rule, rest shape, normals, memory budget) are group inputs, so they
+  live on the modifier (``mod["Socket_N"]``), are animatable and saved in the
+  .blend; the add-on's panel draws them (panels.py);
 * the surface itself is computed by ``gerbs_core`` and written by the add-on
   into a hidden result object (not linked to any scene; its only user is the
-  modifier's hidden "Result" input, so it is saved with the file). The result
-  mesh also stores the input it was built from, and hidden "Built ..." inputs
-  the settings; the group shows the result only while both equal what the
-  modifier receives now, else the base mesh and a warning (node_tree.py), so a
-  stale surface is never shown, applied or exported -- with or without the
-  add-on. The stack, visibility toggles, Apply and the glTF/OBJ exporters see an
-  ordinary modifier result;
+  modifier's hidden "Result" input, so it is saved with the file; a second one,
+  "Render Result", at the render resolution). A result mesh also stores the
+  input it was built from, what it carries and its settings (snapshot.py); the
+  group shows a result only while that record equals what the modifier receives
+  now, else the base mesh and a warning (node_tree.py), so a stale surface is
+  never shown, applied or exported -- with or without the add-on. The stack,
+  visibility toggles, Apply and the glTF/OBJ exporters see an ordinary modifier
+  result;
 * on an invalid mesh the add-on writes the message into the hidden "Error"
   input: a Warning node shows it in the modifier panel and the base mesh passes
   through unchanged.
@@ -117,41 +118,67 @@ def write_settings(mod, **settings) -> None:
         mod[keys[spec.name]] = value
 
 
-def write_built(mod, settings: dict) -> None:
-    """Record the settings a result was built with (compared by the node group)."""
+def property_paths(mod) -> dict:
+    """setting key -> the modifier's property path (``'["Socket_N"]'``, for UILayout.prop,
+    keyframes and drivers)."""
     keys = _identifiers(mod.node_group)
-    for spec, built in zip(ids.SHAPE_SETTINGS, ids.BUILT):
-        value = settings[spec.key]
+    return {s.key: f'["{keys[s.name]}"]' for s in ids.SETTINGS if s.name in keys}
+
+
+def settings_record(settings: dict, resolution: int) -> tuple:
+    """The settings a result built with `settings` at `resolution` records
+    (``ids.RECORD_SETTINGS`` order; menus as item positions, as the node group sees them)."""
+    out = []
+    for spec in ids.RECORD_SETTINGS:
+        value = resolution if spec.key == "resolution" else settings[spec.key]
         if spec.items:
             value = list(spec.items).index(value)  # the Menu Switch output: item position
-        as_float = built.socket_type == "NodeSocketFloat"
-        mod[keys[built.name]] = float(value) if as_float else int(value)
+        out.append(float(value) / (spec.scale if spec.socket_type == "NodeSocketFloat" else 1))
+    return tuple(out)
 
 
-def get_result(mod):
-    return mod.get(_identifiers(mod.node_group)["Result"])
+def _internal(mod, key: str):
+    name = next(s.name for s in ids.INTERNAL if s.key == key)
+    return _identifiers(mod.node_group)[name]
 
 
-def set_result(mod, obj) -> None:
-    mod[_identifiers(mod.node_group)["Result"]] = obj
+def get_result(mod, render: bool = False):
+    return mod.get(_internal(mod, "render_result" if render else "result"))
+
+
+def set_result(mod, obj, render: bool = False) -> None:
+    mod[_internal(mod, "render_result" if render else "result")] = obj
+
+
+def get_names(mod) -> str:
+    return str(mod.get(_internal(mod, "names"), ""))
+
+
+def set_names(mod, names: str) -> bool:
+    """Store the carried layers' names (the node group slices them). True if changed."""
+    key = _internal(mod, "names")
+    if str(mod.get(key, "")) == names:
+        return False
+    mod[key] = names
+    return True
 
 
 def get_error(mod) -> str:
-    return str(mod.get(_identifiers(mod.node_group)["Error"], ""))
+    return str(mod.get(_internal(mod, "error"), ""))
 
 
 def get_warning(mod) -> str:
-    return str(mod.get(_identifiers(mod.node_group)["Warning"], ""))
+    return str(mod.get(_internal(mod, "warning"), ""))
 
 
 def set_warning(mod, message: str) -> bool:
     """Show `message` as the modifier's warning line ("" clears it). True if it changed."""
-    return set_error(mod, message, "Warning")
+    return set_error(mod, message, "warning")
 
 
-def set_error(mod, message: str, socket: str = "Error") -> bool:
+def set_error(mod, message: str, socket: str = "error") -> bool:
     """Show `message` as the modifier's error ("" clears it). True if it changed."""
-    key = _identifiers(mod.node_group)[socket]
+    key = _internal(mod, socket)
     if str(mod.get(key, "")) == message:
         return False
     mod[key] = message
@@ -160,20 +187,27 @@ def set_error(mod, message: str, socket: str = "Error") -> bool:
 
 def upgrade(mod) -> bool:
     """Move a modifier using an older version of the group to the current one,
-    keeping its settings (read by socket name) and result. True if it changed."""
+    keeping its settings (read by socket name) and results; a Render Resolution the
+    old group lacks starts at its Resolution (renders look as before). True if it
+    changed. Old results carry no current record: the node group shows the base mesh
+    until the add-on rebuilds them."""
     old = mod.node_group
     if not is_gerbs_group(old) or is_current_group(old):
         return False
     keys = _identifiers(old)
     raw = {s.key: _python_value(old, s, mod[keys[s.name]])
            for s in ids.SETTINGS if s.name in keys and keys[s.name] in mod}
-    result = mod.get(keys.get("Result", ""))
+    if "render_resolution" not in raw and "resolution" in raw:
+        raw["render_resolution"] = raw["resolution"]
+    kept = {s.key: mod.get(keys[s.name]) for s in ids.INTERNAL
+            if s.socket_type == "NodeSocketObject" and s.name in keys}
     mod.node_group = ensure_group()
     for key, value in raw.items():
         try:
             write_settings(mod, **{key: value})
         except ValueError:  # an out-of-range old value: keep the new group's default
             pass
-    if result is not None:
-        set_result(mod, result)
+    for key, obj in kept.items():
+        if obj is not None:
+            set_result(mod, obj, render=key == "render_result")
     return True

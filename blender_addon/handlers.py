@@ -49,6 +49,7 @@ _errors: dict[tuple, str] = {}  # state key -> current error message (shown in t
 status_message = None  # what _status_text last put in the status bar (None: the default)
 SETTLE_SECONDS = 0.4  # a Follow surface is rebuilt once its Edit Mode drag paused this long
 _settling: dict[tuple, tuple] = {}  # state key -> (object name, time of its last preview)
+_retrying: set = set()  # names of objects to sync again once the depsgraph is evaluated
 
 
 def _window_manager():
@@ -121,6 +122,10 @@ def _sync_one(obj, depsgraph, force: bool) -> None:
             _settling[key] = (obj.name, time.monotonic())
             if not bpy.app.timers.is_registered(settle):
                 bpy.app.timers.register(settle, first_interval=SETTLE_SECONDS)
+        if any(r.retry for r in outcome) and not bpy.app.background:
+            _retrying.add(obj.name)
+            if not bpy.app.timers.is_registered(retry):
+                bpy.app.timers.register(retry, first_interval=0.0)
     except Exception:  # a handler must never raise into Blender
         log.exception("GERBS: sync of %s failed", obj.name)
         message = f"{PREFIX}internal error (see the system console)"
@@ -143,6 +148,17 @@ def settle():
             continue
         _run([obj], bpy.context.evaluated_depsgraph_get(), False, force=True)
     return SETTLE_SECONDS / 2 if _settling else None
+
+
+def retry():
+    """Timer: sync again the objects whose node group was made to pass its input on (a
+    layer the record cannot see appeared); the pass-on evaluation has happened."""
+    names = list(_retrying)
+    _retrying.clear()
+    objects = [bpy.data.objects.get(name) for name in names]
+    if not _busy:
+        _run([o for o in objects if o is not None], bpy.context.evaluated_depsgraph_get(), False)
+    return None
 
 
 def _collect() -> None:
@@ -233,11 +249,33 @@ def on_depsgraph_update(scene, depsgraph) -> None:
     if _busy or not depsgraph.id_type_updated("OBJECT"):
         return
     objects, lost = _candidates(depsgraph)
+    if depsgraph.mode == "RENDER":  # a final render: its result only (engine.may_write)
+        if objects and _live(scene):
+            _render_sync(objects, depsgraph)
+        return
     garbage = lost or (depsgraph.id_type_updated("SCENE") and _watch.changed())
     if not _live(scene):
         objects = []
     if objects or garbage:
         _run(objects, depsgraph, garbage)
+
+
+def _render_sync(objects, depsgraph) -> None:
+    """Sync the render results for a render's depsgraph: no status bar, no garbage
+    collection (the render may run beside the interface)."""
+    global _busy
+    _busy = True
+    try:
+        for obj in objects:
+            mods = gn.gerbs_modifiers(obj)
+            if not mods:
+                continue
+            try:
+                engine.sync_object(obj, depsgraph)
+            except Exception:  # a handler must never raise into Blender
+                log.exception("GERBS: render sync of %s failed", obj.name)
+    finally:
+        _busy = False
 
 
 def _upgrade_all() -> None:
@@ -297,6 +335,9 @@ def register() -> None:
 
 def unregister() -> None:
     _settling.clear()
+    _retrying.clear()
+    if bpy.app.timers.is_registered(retry):
+        bpy.app.timers.unregister(retry)
     if bpy.app.timers.is_registered(settle):
         bpy.app.timers.unregister(settle)
     if status_message is not None:  # our message must not outlive the add-on in the status bar

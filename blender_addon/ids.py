@@ -16,6 +16,7 @@ OP_ADD = "object.gerbs_add_surface"
 OP_APPLY = "object.gerbs_apply"
 OP_REBUILD = "object.gerbs_rebuild"
 OP_REMOVE = "object.gerbs_remove"
+OP_SELECT_PROBLEM = "object.gerbs_select_problem"
 
 # --- UI -------------------------------------------------------------------------
 PANEL_STATUS = "GERBS_PT_status"
@@ -30,25 +31,65 @@ SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
 NODE_GROUP_NAME = "GERBS Blending Surface"
 MODIFIER_NAME = "GERBS Blending Surface"
 GROUP_TAG = "gerbs_group_version"  # custom property on the node group
-GROUP_VERSION = 4  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest Shape;
-# 4: Merge by Distance, Merge Distance and the Warning line
+GROUP_VERSION = 5  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
+# Shape; 4: Merge by Distance, Merge Distance and the Warning line; 5: Render Resolution
+# and a render result, the built settings and carried attributes recorded on each result
+# (no "Built ..." inputs), the input passed on while stale
 RESULT_TAG = "gerbs_result"  # custom property on each hidden result object and its mesh
 RESULT_NAME = "GERBS Result"  # prefix of the result object / mesh names
+RENDER_RESULT_NAME = "GERBS Render Result"
+EDIT_COPY_NAME = ".GERBS edit copy"  # temporary copy of a mesh in Edit Mode (mesh_io)
 
 # --- the input a result was built from, stored on the result mesh ---------------
 # Hidden attributes ("." prefix); the node group compares them with the geometry
 # the modifier receives and strips them from its output. Each uses the first
-# V / C / F elements of its domain (a surface has P >= V points, 3T >= C corners
-# and T >= F triangles).
+# V / E / F / C elements of its domain (a surface has P >= V points, at least E
+# edges, F faces and C corners).
 SNAPSHOT_PREFIX = ".gerbs_src_"  # (no other attribute starts with it)
 SNAP_POSITION = ".gerbs_src_position"  # POINT, FLOAT_VECTOR: base vertex positions
 SNAP_NORMAL = ".gerbs_src_normal"  # POINT, FLOAT_VECTOR: vertex normals (Use Custom Normals)
-SNAP_COUNT = ".gerbs_src_count"  # POINT, INT: (V, F, C) on points 0, 1, 2
+SNAP_COUNT = ".gerbs_src_count_"  # + k: POINT, INT, its first point: (V, F, C, E, A)[k] (A: layers)
 SNAP_CORNER = ".gerbs_src_corner"  # CORNER, INT: vertex of each base face corner
 SNAP_FACE_SIZE = ".gerbs_src_face_size"  # FACE, INT: corners of each base face
 SNAP_MATERIAL = ".gerbs_src_material"  # FACE, INT: material index of each base face
-SNAPSHOT_ATTRIBUTES = (SNAP_POSITION, SNAP_NORMAL, SNAP_COUNT, SNAP_CORNER, SNAP_FACE_SIZE,
-                       SNAP_MATERIAL)
+SNAP_EDGE_A = ".gerbs_src_edge_a"  # EDGE, INT: first vertex of each base edge
+SNAP_EDGE_B = ".gerbs_src_edge_b"  # EDGE, INT: second vertex of each base edge
+SNAP_SETTINGS = ".gerbs_src_setting_"  # + k: POINT, FLOAT, its first point: ids.RECORD_SETTINGS[k]
+#                                        as built (menus: item position; resolution: the one built)
+SNAP_LAYERS = ".gerbs_src_layers"  # POINT, INT: 4 per carried layer i: start and length of its
+#                                   name in the modifier's "Attribute Names", its check
+#                                   branch (LAYER_KINDS x DOMAINS) and 1 for a vertex group
+SNAP_LAYER = ".gerbs_src_layer_"  # + i: the base values of carried layer i (its domain, type)
+N_COUNTS = 5  # SNAP_COUNT + 0..4 (one attribute each: any mesh has a first point)
+SNAPSHOT_ATTRIBUTES = (SNAP_POSITION, SNAP_NORMAL, SNAP_CORNER, SNAP_FACE_SIZE, SNAP_MATERIAL,
+                       SNAP_EDGE_A, SNAP_EDGE_B, SNAP_LAYERS) + tuple(
+    f"{SNAP_COUNT}{k}" for k in range(N_COUNTS))  # + SNAP_SETTINGS + k (record_names())
+OUT_WEIGHT = ".gerbs_src_weight_"  # + i: POINT FLOAT, output weights of vertex-group layer i
+#                                   (the node group stores them into the result's group)
+# What the modifier received, on the geometry it passes on while it shows no surface
+# (stale or error): the add-on reads it from the final mesh through deform-only
+# modifiers below GERBS (they move "position" only).
+CHANNEL_PREFIX = ".gerbs_in_"
+CHANNEL_POSITION = ".gerbs_in_position"  # POINT, FLOAT_VECTOR
+CHANNEL_WEIGHT = ".gerbs_in_weight_"  # + i: POINT FLOAT, the weights of vertex-group layer i
+
+# --- carried attributes ------------------------------------------------------------
+DOMAINS = ("POINT", "EDGE", "FACE", "CORNER")
+# data type -> (foreach_get property, components, numpy dtype, check kind: 0 vector, 1
+# color, 2 integer; the node group compares a layer through that kind of Named Attribute)
+CARRIED_TYPES = {
+    "FLOAT": ("value", 1, "float32", 0), "FLOAT2": ("vector", 2, "float32", 0),
+    "FLOAT_VECTOR": ("vector", 3, "float32", 0), "FLOAT_COLOR": ("color", 4, "float32", 1),
+    "BYTE_COLOR": ("color_srgb", 4, "float32", 1), "INT": ("value", 1, "int32", 2),
+    "INT8": ("value", 1, "int32", 2), "BOOLEAN": ("value", 1, "bool", 2),
+}
+LAYER_KINDS = ("FLOAT_VECTOR", "FLOAT_COLOR", "INT")  # the Named Attribute type of each kind
+NOT_CARRIED = ("position", "custom_normal")  # and every name starting with "."
+VERTEX_MARKS = ("crease_vert", "bevel_weight_vert")  # kept at the mesh vertices, 0 between
+# modifiers that only move vertices (what GERBS passes on reaches the final mesh intact)
+DEFORM_ONLY = ("ARMATURE", "CAST", "CORRECTIVE_SMOOTH", "CURVE", "DISPLACE", "HOOK",
+               "LAPLACIANDEFORM", "LAPLACIANSMOOTH", "LATTICE", "MESH_DEFORM", "SHRINKWRAP",
+               "SIMPLE_DEFORM", "SMOOTH", "SURFACE_DEFORM", "WARP", "WAVE")
 
 STALE_MESSAGE = ("GERBS: the surface is out of date with this mesh or its settings, so the "
                  "base mesh is shown; enable the GERBS Blending Surface add-on to update it")
@@ -78,25 +119,44 @@ class SocketSpec:
 
 SETTINGS = (
     SocketSpec("kernel", "Kernel", "NodeSocketMenu", "erbs", items=KERNELS,
-               description="Univariate GERBS kernel F of the partition of unity"),
+               description="How each vertex's patch hands over to its neighbours. ERBS and "
+                           "Logistic: smooth everywhere (no visible seams in reflections). "
+                           "BFBS: smooth to the order set by Left / Right. Affine: straight "
+                           "ramps, visible creases where patches meet (for comparison)"),
     SocketSpec("alpha", "Alpha", "NodeSocketFloat", 1.0, 0.01, 100.0,
-               "ERBS intrinsic parameter alpha"),
+               "ERBS: how long each patch holds on near its vertex and near the end of its "
+               "reach before blending. Larger: flatter around the vertices, shorter and "
+               "steeper blends between them"),
     SocketSpec("beta", "Beta", "NodeSocketFloat", 1.0, 0.01, 100.0,
-               "ERBS intrinsic parameter beta"),
+               "ERBS: sharpness of the handover between neighbouring patches. Larger: a more "
+               "abrupt change around Lambda; smaller: a gentler, wider blend"),
     SocketSpec("gamma", "Gamma", "NodeSocketFloat", 1.0, 0.01, 100.0,
-               "ERBS intrinsic parameter gamma"),
+               "ERBS: like Alpha, for the far end of each patch's reach only. Larger: the "
+               "neighbours take over later and more steeply"),
     SocketSpec("lam", "Lambda", "NodeSocketFloat", 0.5, 0.0, 1.0,
-               "ERBS intrinsic parameter lambda"),
+               "ERBS: where the handover is steepest, from the vertex (0) to the end of its "
+               "reach (1). Larger: every vertex shapes more of the surface around it"),
     SocketSpec("sigma", "Sigma", "NodeSocketFloat", 1.0, 0.0, 100.0,
-               "ERBS intrinsic parameter sigma"),
+               "ERBS: width of the steep part of the handover around Lambda (larger: wider). "
+               "Whole numbers keep the surface smooth everywhere; others make the blend "
+               "only finitely smooth at Lambda"),
     SocketSpec("bfbs_left", "BFBS Left", "NodeSocketInt", 2, 0, 16,
-               "BFBS kernel exponent i_left (F = regularized incomplete beta I_t(i+1, j+1))"),
+               "BFBS: smoothness order where a patch starts to hand over (0: a visible "
+               "kink; each step one more derivative continuous). Larger: the patch holds "
+               "on longer near its vertex"),
     SocketSpec("bfbs_right", "BFBS Right", "NodeSocketInt", 2, 0, 16,
-               "BFBS kernel exponent i_right"),
+               "BFBS: smoothness order at the end of a patch's reach (0: a visible kink). "
+               "Larger: the neighbours take over more gently"),
     SocketSpec("resolution", "Resolution", "NodeSocketInt", 4, 1, 64,
-               "Segments per mesh edge in the output tessellation"),
+               "Viewport: segments per mesh edge in the viewport, in Apply and in "
+               "exports. More: a smoother-looking surface, more faces (a quad gives r x r)"),
+    SocketSpec("render_resolution", "Render Resolution", "NodeSocketInt", 4, 1, 64,
+               "Render: segments per mesh edge in final renders (F12). More: a "
+               "smoother-looking render, more faces; the shape is the same surface"),
     SocketSpec("boundary", "Boundary", "NodeSocketMenu", "keep", items=BOUNDARIES,
-               description="Boundary vertices: keep the corners or straighten the border"),
+               description="Open borders. Keep: border vertices keep their corners (flat "
+                           "meshes stay flat, mesh corners stay sharp). Straighten: the "
+                           "border runs smoothly through its vertices; corners get rounded"),
     SocketSpec("rest", "Rest Shape", "NodeSocketMenu", "follow", items=REST_SHAPES,
                description="Follow: the surface is always that of the current mesh (rebuilt "
                            "after an edit; during an Edit Mode drag it updates fast and is "
@@ -104,13 +164,16 @@ SETTINGS = (
                            "Rebuild stays the rest shape and edits update the surface as a "
                            "fast linear deformation of it, like a bound deform modifier"),
     SocketSpec("use_normals", "Use Custom Normals", "NodeSocketBool", False,
-               description="Use the base mesh's vertex normals as Hermite data"),
+               description="Make the surface leave every vertex perpendicular to the "
+                           "mesh's vertex normal (edit normals to steer the surface); "
+                           "every edit then rebuilds the surface"),
     SocketSpec("merge", "Merge by Distance", "NodeSocketBool", False,
-               description="Weld vertices closer than Merge Distance before building (unwelded "
-                           "seams of imports: split UVs or normals); off: such seams stay open"),
+               description="Weld vertices closer than Merge Distance before building, so an "
+                           "unwelded seam (split UVs or normals of an import) is smooth "
+                           "across; off: the surface has a crack along such seams"),
     SocketSpec("merge_distance", "Merge Distance", "NodeSocketFloat", 1.0e-4, 0.0, 1.0e6,
-               "Largest distance of vertices welded by Merge by Distance (0: only coincident "
-               "ones)"),
+               "Merge by Distance: vertices closer than this become one, and the surface "
+               "passes through it once (0: only coincident ones)"),
     SocketSpec("memory_budget", "Memory Budget (MB)", "NodeSocketFloat", 2000.0, 1.0, 1.0e6,
                "Largest memory (MB) a build may use; larger builds are refused with an error",
                scale=1.0e6, shape=False),
@@ -118,20 +181,27 @@ SETTINGS = (
 INTERNAL = (
     SocketSpec("result", "Result", "NodeSocketObject", hidden=True,
                description="Hidden object holding the surface (written by the add-on)"),
+    SocketSpec("render_result", "Render Result", "NodeSocketObject", hidden=True,
+               description="Hidden object holding the surface at the render resolution"),
     SocketSpec("error", "Error", "NodeSocketString", "", hidden=True,
                description="Last error of the add-on; shown as a node warning"),
     SocketSpec("warning", "Warning", "NodeSocketString", "", hidden=True,
                description="What the last build repaired in the mesh; shown as a node warning"),
+    SocketSpec("names", "Attribute Names", "NodeSocketString", "", hidden=True,
+               description="Names of the carried attributes, end to end (internal)"),
 )
+# settings drawn by the add-on's panel only (not in the modifier's own input list)
+KERNEL_PARAMETERS = {"erbs": ("alpha", "beta", "gamma", "lam", "sigma"),
+                     "bfbs": ("bfbs_left", "bfbs_right"), "logistic": (), "affine": ()}
 SHAPE_SETTINGS = tuple(s for s in SETTINGS if s.shape)
-# The settings the result was built from (written by the add-on after each build;
-# the node group shows the base mesh while they differ from the current settings).
-# Menus and booleans as INT (menu: item position), ints as INT, floats as FLOAT;
-# -1 never matches a valid setting.
-BUILT = tuple(
-    SocketSpec(f"built_{s.key}", f"Built {s.name}",
-               "NodeSocketFloat" if s.socket_type == "NodeSocketFloat" else "NodeSocketInt",
-               -1, hidden=True, description=f"{s.name} the result was built with (internal)")
-    for s in SHAPE_SETTINGS)
+# The settings each result records as built (SNAP_SETTINGS, in this order); the node
+# group shows a result only while they equal the current ones, "resolution" standing
+# for the resolution the result is for (viewport or render).
+RECORD_SETTINGS = tuple(s for s in SHAPE_SETTINGS if s.key != "render_resolution")
 SETTING_KEYS = tuple(s.key for s in SETTINGS)
+
+
+def record_names() -> tuple:
+    """Every fixed attribute of a result's record (the settings' included)."""
+    return SNAPSHOT_ATTRIBUTES + tuple(f"{SNAP_SETTINGS}{k}" for k in range(len(RECORD_SETTINGS)))
 DEFAULTS = {s.key: s.default * s.scale if s.scale != 1.0 else s.default for s in SETTINGS}

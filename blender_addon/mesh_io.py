@@ -6,8 +6,8 @@ read of an original mesh's positions (``attributes["position"]``, even just
 looking the attribute up, or ``vertices.foreach_get("co")``) makes Blender
 un-share the position array the evaluated copy shares with it, and every
 ``MeshVertex`` the user holds then points at the old array (their edits are
-lost, later writes land in freed memory). See engine.read_input for where the
-evaluated mesh comes from.
+lost, later writes land in freed memory). See stack.read_input for where the
+evaluated mesh comes from; snapshot.py stores an input on its result.
 
 Positions through ``attributes["position"].data.foreach_get/foreach_set
 ("vector", ...)`` on float32 buffers (25-50x faster than
@@ -23,7 +23,8 @@ each face corner, faces in order); material indices (F,) int32.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import contextlib
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -32,28 +33,43 @@ from . import ids
 
 @dataclass(frozen=True, eq=False)
 class MeshInput:
-    """The geometry a surface is built from, exactly as Blender stores it."""
+    """The geometry a surface is built from, exactly as Blender stores it, and what it
+    carries (:class:`attributes.Carried`; None when not read)."""
 
     positions: np.ndarray  # (V, 3) float32
     offsets: np.ndarray  # (F+1,) int64
     corners: np.ndarray  # (C,) int32
     materials: np.ndarray  # (F,) int32
     normals: np.ndarray | None = None  # (V, 3) float32 vertex normals, when used
+    corner_loops: np.ndarray | None = None  # (C,) Blender loop of each CSR corner (None: same)
+    carried: object = None  # attributes.Carried
 
     def same_topology(self, other) -> bool:
         return (other is not None and np.array_equal(self.offsets, other.offsets)
                 and np.array_equal(self.corners, other.corners))
 
-    def same(self, other) -> bool:
-        """Everything equal (bit for bit; NaN never equals)."""
+    def same_geometry(self, other) -> bool:
+        """Positions, topology and normals equal (bit for bit; NaN never equals): the
+        surface is the same (what it carries may still differ)."""
         return (self.same_topology(other) and np.array_equal(self.positions, other.positions)
-                and np.array_equal(self.materials, other.materials)
                 and (self.normals is None) == (other.normals is None)
                 and (self.normals is None or np.array_equal(self.normals, other.normals)))
+
+    def same(self, other) -> bool:
+        """Everything equal: the geometry, the material indices and what it carries."""
+        return (self.same_geometry(other) and np.array_equal(self.materials, other.materials)
+                and self.carried is not None and self.carried.same(other.carried))
+
+    def loops(self) -> np.ndarray:
+        """(C,) the Blender loop of each CSR corner."""
+        return np.arange(len(self.corners)) if self.corner_loops is None else self.corner_loops
 
     def faces(self):
         """Faces for the core: an (F, k) array if all faces have k corners, else a list."""
         return faces_from_csr(self.offsets, self.corners)
+
+    def with_carried(self, carried) -> "MeshInput":
+        return replace(self, carried=carried)
 
 
 def faces_from_csr(offsets: np.ndarray, corners: np.ndarray):
@@ -74,8 +90,9 @@ def read_positions(mesh) -> np.ndarray:
     return _get(mesh.attributes["position"].data, "vector", len(mesh.vertices), np.float32, 3)
 
 
-def read_topology(mesh) -> tuple[np.ndarray, np.ndarray]:
-    """Faces of an evaluated or add-on-owned mesh as CSR (offsets int64, corners int32)."""
+def read_topology(mesh, with_loops: bool = False):
+    """Faces of an evaluated or add-on-owned mesh as CSR (offsets int64, corners int32);
+    with_loops: also the Blender loop of each CSR corner (None when they coincide)."""
     n_faces = len(mesh.polygons)
     sizes = _get(mesh.polygons, "loop_total", n_faces, np.int32)
     attr = mesh.attributes.get(".corner_vert")
@@ -86,61 +103,63 @@ def read_topology(mesh) -> tuple[np.ndarray, np.ndarray]:
     start = _get(mesh.polygons, "loop_start", n_faces, np.int32)
     offsets = np.zeros(n_faces + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])
+    loops = None
     if n_faces and not np.array_equal(start, offsets[:-1]):  # faces not in loop order
-        corners = np.concatenate([corners[s:s + n] for s, n in zip(start, sizes)])
-    return offsets, corners
+        loops = np.concatenate([np.arange(s, s + n) for s, n in zip(start, sizes)])
+        corners = corners[loops]
+    return (offsets, corners, loops) if with_loops else (offsets, corners)
 
 
-def read_mesh(mesh, normals: bool = False) -> MeshInput:
-    """Everything a build needs from an evaluated mesh (never the user's original)."""
-    offsets, corners = read_topology(mesh)
+def read_mesh(mesh, normals: bool = False, positions=None) -> MeshInput:
+    """Everything a build needs from an evaluated mesh (never the user's original);
+    `positions`: (V, 3) float32 to use instead of the mesh's own."""
+    offsets, corners, loops = read_topology(mesh, with_loops=True)
     return MeshInput(
-        positions=read_positions(mesh), offsets=offsets, corners=corners,
+        positions=read_positions(mesh) if positions is None else positions,
+        offsets=offsets, corners=corners,
         materials=_get(mesh.polygons, "material_index", len(mesh.polygons), np.int32),
         normals=_get(mesh.vertex_normals, "vector", len(mesh.vertices), np.float32, 3)
-        if normals else None)
+        if normals else None, corner_loops=loops)
 
 
-def read_edit_mesh(mesh, normals: bool = False) -> MeshInput:
-    """The same from an original mesh in Edit Mode, through its BMesh (whose
-    elements stay where they are: nothing is reallocated)."""
+@contextlib.contextmanager
+def edit_mesh_copy(mesh):
+    """A temporary copy of an original mesh in Edit Mode, made from its BMesh in C
+    (``BMesh.to_mesh``; the BMesh's elements stay where they are, nothing of the
+    user's is reallocated), so it reads like an evaluated mesh. Removed on exit."""
     import bmesh
+    import bpy
 
     bm = bmesh.from_edit_mesh(mesh)
-    bm.verts.index_update()
-    faces = [[v.index for v in f.verts] for f in bm.faces]
-    sizes = np.fromiter((len(f) for f in faces), dtype=np.int64, count=len(faces))
-    offsets = np.zeros(len(faces) + 1, dtype=np.int64)
-    np.cumsum(sizes, out=offsets[1:])
-    return MeshInput(
-        positions=np.array([v.co for v in bm.verts], dtype=np.float32).reshape(-1, 3),
-        offsets=offsets,
-        corners=np.fromiter((i for f in faces for i in f), dtype=np.int32, count=int(offsets[-1])),
-        materials=np.fromiter((f.material_index for f in bm.faces), dtype=np.int32,
-                              count=len(faces)),
-        normals=np.array([v.normal for v in bm.verts], dtype=np.float32).reshape(-1, 3)
-        if normals else None)
+    tmp = bpy.data.meshes.new(ids.EDIT_COPY_NAME)
+    try:
+        bm.to_mesh(tmp)
+        yield tmp
+    finally:
+        bpy.data.meshes.remove(tmp)
 
 
-def write_surface(mesh, points: np.ndarray, triangles: np.ndarray, edges=None) -> None:
-    """Replace the (result) mesh's geometry by a triangle mesh (points (P,3), triangles (T,3)).
+def write_surface(mesh, points: np.ndarray, offsets: np.ndarray, corners: np.ndarray,
+                  edges=None) -> None:
+    """Replace the (result) mesh's geometry by points (P, 3) and polygons (CSR: offsets
+    (Fo+1,), corners (Co,) point indices).
 
-    edges: optional (edge_verts (E, 2), corner_edges (T, 3)) of exactly these
-    triangles (every undirected edge once; corner_edges[t, i] = edge from corner i
-    to corner i+1), e.g. :meth:`gerbs_core.mesh.lattice.Lattice.edges`: written as
-    the raw ``.edge_verts`` / ``.corner_edge`` attributes instead of letting
-    Blender hash all 3T half-edges (``update(calc_edges=True)``: measured 14-23 ms
-    for 248k triangles, against ~1.5 ms for the two attribute writes).
+    edges: optional (edge_verts (E, 2), corner_edges (Co,)) of exactly these
+    polygons (every undirected edge once; corner_edges[c] = edge from corner c to
+    the next corner of its polygon), e.g. :meth:`gerbs_core.mesh.lattice.Lattice.edges`:
+    written as the raw ``.edge_verts`` / ``.corner_edge`` attributes instead of
+    letting Blender hash all half-edges (``update(calc_edges=True)``: measured
+    14-23 ms for 248k triangles, against ~1.5 ms for the two attribute writes).
     """
-    n_points, n_tris = len(points), len(triangles)
+    n_points, n_faces, n_corners = len(points), len(offsets) - 1, len(corners)
     mesh.clear_geometry()
     mesh.vertices.add(n_points)
-    mesh.loops.add(3 * n_tris)
-    mesh.polygons.add(n_tris)
+    mesh.loops.add(n_corners)
+    mesh.polygons.add(n_faces)
     mesh.attributes["position"].data.foreach_set(
         "vector", np.ascontiguousarray(points, dtype=np.float32).ravel())
-    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * n_tris, 3, dtype=np.int32))
-    corner_verts = np.ascontiguousarray(triangles, dtype=np.int32).ravel()
+    mesh.polygons.foreach_set("loop_start", np.ascontiguousarray(offsets[:-1], dtype=np.int32))
+    corner_verts = np.ascontiguousarray(corners, dtype=np.int32)
     attr = mesh.attributes.get(".corner_vert")
     if attr is not None:  # raw attribute write: ~300x faster than loops' vertex_index
         attr.data.foreach_set("value", corner_verts)
@@ -156,7 +175,6 @@ def write_surface(mesh, points: np.ndarray, triangles: np.ndarray, edges=None) -
         mesh.update()
     else:
         mesh.update(calc_edges=True)
-    mesh.shade_smooth()
 
 
 def write_positions(mesh, points: np.ndarray) -> None:
@@ -164,63 +182,3 @@ def write_positions(mesh, points: np.ndarray) -> None:
     mesh.attributes["position"].data.foreach_set(
         "vector", np.ascontiguousarray(points, dtype=np.float32).ravel())
     mesh.update()
-
-
-def write_material_indices(mesh, indices: np.ndarray) -> None:
-    mesh.polygons.foreach_set("material_index", np.ascontiguousarray(indices, dtype=np.int32))
-    mesh.update()
-
-
-def _put(mesh, name, kind, domain, values, size) -> None:
-    """Attribute `name` of `mesh` := `values` in its first elements, zeros after."""
-    attr = mesh.attributes.get(name)
-    if attr is None or attr.data_type != kind or attr.domain != domain:
-        if attr is not None:
-            mesh.attributes.remove(attr)
-        attr = mesh.attributes.new(name, kind, domain)
-    width = 3 if kind == "FLOAT_VECTOR" else 1
-    buf = np.zeros(size * width, dtype=np.float32 if width == 3 else np.int32)
-    flat = np.ravel(values)
-    buf[:len(flat)] = flat
-    attr.data.foreach_set("vector" if width == 3 else "value", buf)
-
-
-def write_snapshot(mesh, inp: MeshInput, positions_only: bool = False) -> None:
-    """Store `inp` on the result `mesh` (hidden attributes, ids.SNAPSHOT_ATTRIBUTES)."""
-    n_points, n_faces, n_corners = len(mesh.vertices), len(mesh.polygons), len(mesh.loops)
-    _put(mesh, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", inp.positions, n_points)
-    if positions_only:
-        return
-    counts = (len(inp.positions), len(inp.offsets) - 1, len(inp.corners))
-    _put(mesh, ids.SNAP_COUNT, "INT", "POINT", counts, n_points)
-    _put(mesh, ids.SNAP_CORNER, "INT", "CORNER", inp.corners, n_corners)
-    _put(mesh, ids.SNAP_FACE_SIZE, "INT", "FACE", np.diff(inp.offsets), n_faces)
-    _put(mesh, ids.SNAP_MATERIAL, "INT", "FACE", inp.materials, n_faces)
-    if inp.normals is not None:
-        _put(mesh, ids.SNAP_NORMAL, "FLOAT_VECTOR", "POINT", inp.normals, n_points)
-    elif mesh.attributes.get(ids.SNAP_NORMAL) is not None:
-        mesh.attributes.remove(mesh.attributes[ids.SNAP_NORMAL])
-
-
-def read_snapshot(mesh) -> MeshInput | None:
-    """The input stored by :func:`write_snapshot` (None if the mesh has none)."""
-    attrs = mesh.attributes
-    if any(attrs.get(name) is None for name in ids.SNAPSHOT_ATTRIBUTES if name != ids.SNAP_NORMAL):
-        return None
-    n_points, n_faces, n_corners = len(mesh.vertices), len(mesh.polygons), len(mesh.loops)
-    if n_points < 3:
-        return None
-    V, F, C = (int(c) for c in _get(attrs[ids.SNAP_COUNT].data, "value", n_points, np.int32)[:3])
-    if not (0 <= V <= n_points and 0 <= F <= n_faces and 0 <= C <= n_corners):
-        return None
-    sizes = _get(attrs[ids.SNAP_FACE_SIZE].data, "value", n_faces, np.int32)[:F]
-    offsets = np.zeros(F + 1, dtype=np.int64)
-    np.cumsum(sizes, out=offsets[1:])
-    normals = attrs.get(ids.SNAP_NORMAL)
-    return MeshInput(
-        positions=_get(attrs[ids.SNAP_POSITION].data, "vector", n_points, np.float32, 3)[:V].copy(),
-        offsets=offsets,
-        corners=_get(attrs[ids.SNAP_CORNER].data, "value", n_corners, np.int32)[:C].copy(),
-        materials=_get(attrs[ids.SNAP_MATERIAL].data, "value", n_faces, np.int32)[:F].copy(),
-        normals=None if normals is None else
-        _get(normals.data, "vector", n_points, np.float32, 3)[:V].copy())

@@ -1,15 +1,17 @@
 """Building the node group behind the modifier (see geometry_nodes.py for why).
 
-The group shows the hidden result object only while that result is *fresh*:
-built from exactly the geometry the modifier receives now and with exactly the
-current settings. Otherwise it passes its input through and says why::
+The group shows a hidden result object only while that result is *fresh*
+(node_fresh.py): built from exactly the geometry the modifier receives now, with
+exactly what it carries and the current settings. There are two results: "Result"
+at the viewport resolution (viewport, Apply, exports) and "Render Result" at the
+render resolution (final renders)::
 
-    fresh = Error == ""
-            and counts (V, F, C) == result's SNAP_COUNT
-            and every position, corner vertex, face size and material index of the
-                input == the result's SNAP_* attribute at the same index
-            and every shape setting == its hidden "Built ..." input
-    output = (result if fresh else input) without the SNAP_* attributes
+    view   = Result if no Error and Result is fresh for Resolution
+             else the input, passed on with the channel (node_fresh.channel)
+    render = Render Result if no Error and it is fresh for Render Resolution
+             else view (a render without its own result shows the viewport surface)
+    output = view in the viewport (Is Viewport), render in final renders,
+             results with their vertex groups written and without their record
 
 The comparisons are exact (epsilon 0): the add-on stores the float32 values it
 read, so any edit, however small, makes the result stale. This is what keeps a
@@ -17,101 +19,17 @@ stale surface from being shown, applied or exported when nothing updated the
 result: a file opened without the add-on, a frame change the add-on missed,
 ``modifier_apply`` right after an edit. With the add-on running, the handlers
 rebuild the result within the same depsgraph update and the second evaluation
-shows it.
+shows it. Switch nodes are lazy, so the viewport never reads the render result.
 
-Node types missing in older Blender (the Warning node before 4.3, see
-:mod:`compat`) are skipped: the switch logic does not depend on them.
+Every setting is hidden in the modifier's own input list: the add-on's panel
+draws them (only the chosen kernel's parameters), panels.py.
 """
 from __future__ import annotations
 
-from . import compat, ids
+from . import ids, node_fresh
+from .node_helpers import Tree
 
 MENU_NODE = "gerbs_menu_"  # name prefix of the Menu Switch nodes defining the menus
-
-
-class _Tree:
-    """Small helper: create nodes and links, find sockets by identifier."""
-
-    def __init__(self, group):
-        self.nodes, self.links = group.nodes, group.links
-
-    def node(self, kind, **props):
-        try:
-            node = self.nodes.new(kind)
-        except RuntimeError:  # node type unknown to this Blender version
-            return None
-        for name, value in props.items():
-            setattr(node, name, value)
-        return node
-
-    @staticmethod
-    def socket(sockets, identifier):
-        return next(s for s in sockets if s.identifier == identifier)
-
-    def link(self, src, dst):
-        self.links.new(src, dst)
-
-    def compare(self, data_type, operation, a, b):
-        """Exact comparison of two sockets -> BOOLEAN output."""
-        node = self.node("FunctionNodeCompare", data_type=data_type, operation=operation)
-        suffix = {"FLOAT": "", "INT": "_INT", "VECTOR": "_VEC3", "STRING": "_STR"}[data_type]
-        if data_type == "VECTOR":
-            node.mode = "ELEMENT"
-        if data_type in ("FLOAT", "VECTOR"):
-            node.inputs["Epsilon"].default_value = 0.0
-        for name, value in (("A", a), ("B", b)):
-            sock = self.socket(node.inputs, name + suffix)
-            if isinstance(value, (int, float, str)):
-                sock.default_value = value
-            else:
-                self.link(value, sock)
-        return node.outputs[0]
-
-    def boolean(self, operation, *values):
-        """AND/OR over any number of boolean outputs (NOT over one)."""
-        out = values[0]
-        if operation == "NOT":
-            node = self.node("FunctionNodeBooleanMath", operation="NOT")
-            self.link(out, node.inputs[0])
-            return node.outputs[0]
-        for value in values[1:]:
-            node = self.node("FunctionNodeBooleanMath", operation=operation)
-            self.link(out, node.inputs[0])
-            self.link(value, node.inputs[1])
-            out = node.outputs[0]
-        return out
-
-    def sample(self, geometry, name, data_type, domain, index):
-        """The result's attribute `name` at `index` (a socket or an int)."""
-        attr = self.node("GeometryNodeInputNamedAttribute", data_type=data_type)
-        attr.inputs["Name"].default_value = name
-        node = self.node("GeometryNodeSampleIndex", data_type=data_type, domain=domain)
-        self.link(geometry, node.inputs["Geometry"])
-        self.link(attr.outputs["Attribute"], node.inputs["Value"])
-        if isinstance(index, int):
-            node.inputs["Index"].default_value = index
-        else:
-            self.link(index, node.inputs["Index"])
-        return node.outputs[0]
-
-    def none_differ(self, geometry, domain, differs):
-        """True when the boolean field `differs` is False on every element of `domain`."""
-        stat = self.node("GeometryNodeAttributeStatistic", data_type="FLOAT", domain=domain)
-        self.link(geometry, stat.inputs["Geometry"])
-        self.link(differs, stat.inputs["Attribute"])
-        return self.compare("FLOAT", "EQUAL", stat.outputs["Max"], 0.0)
-
-    def warning(self, show, message, kind):
-        """A node warning shown while `show` is True; returns `show` passed through it."""
-        if not compat.has_node_type(compat.WARNING_NODE):  # Blender 4.2 (see compat)
-            return show
-        node = self.node(compat.WARNING_NODE, warning_type=kind)
-        self.link(show, node.inputs["Show"])
-        if isinstance(message, str):
-            node.inputs["Message"].default_value = message
-        else:
-            self.link(message, node.inputs["Message"])
-        return node.outputs["Show"]
 
 
 def _new_socket(itf, spec: ids.SocketSpec):
@@ -128,11 +46,11 @@ def _new_socket(itf, spec: ids.SocketSpec):
         sock.max_value = spec.max
     if spec.default is not None and spec.socket_type != "NodeSocketMenu":
         sock.default_value = spec.default
-    sock.hide_in_modifier = spec.hidden
+    sock.hide_in_modifier = True  # internal state, or drawn by the add-on's panel
     return sock
 
 
-def _menus(t: _Tree, gin, sockets) -> dict:
+def _menus(t: Tree, gin, sockets) -> dict:
     """A Menu Switch per menu setting: it defines the menu's items (a menu input
     gets its items from the Menu Switch it is linked to) and outputs the chosen
     item's position (INT). Returns key -> that output."""
@@ -152,64 +70,17 @@ def _menus(t: _Tree, gin, sockets) -> dict:
     return out
 
 
-def _settings_fresh(t: _Tree, gin, menus):
-    checks = []
-    for spec, built in zip(ids.SHAPE_SETTINGS, ids.BUILT):
-        current = menus.get(spec.key, gin.outputs[spec.name])
-        kind = "FLOAT" if built.socket_type == "NodeSocketFloat" else "INT"
-        checks.append(t.compare(kind, "EQUAL", current, gin.outputs[built.name]))
-    return t.boolean("AND", *checks)
+def _fresh(t: Tree, gin, base, result, current, resolution):
+    names = gin.outputs["Attribute Names"]
+    return t.boolean("AND", node_fresh.settings_fresh(t, result, current, resolution),
+                     node_fresh.geometry_fresh(t, base, result),
+                     node_fresh.layers_fresh(t, base, result, names))
 
 
-def _geometry_fresh(t: _Tree, base, result):
-    """Exact equality of the base geometry with the snapshot stored on the result."""
-    size = t.node("GeometryNodeAttributeDomainSize", component="MESH")
-    t.link(base, size.inputs["Geometry"])
-    checks = [t.compare("INT", "EQUAL", size.outputs[name],
-                        t.sample(result, ids.SNAP_COUNT, "INT", "POINT", k))
-              for k, name in enumerate(("Point Count", "Face Count", "Face Corner Count"))]
-    index = t.node("GeometryNodeInputIndex").outputs[0]
-    position = t.node("GeometryNodeInputPosition").outputs[0]
-    checks.append(t.none_differ(base, "POINT", t.compare(
-        "VECTOR", "NOT_EQUAL", position,
-        t.sample(result, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", index))))
-    corner_vert = t.node("GeometryNodeVertexOfCorner")
-    t.link(index, corner_vert.inputs["Corner Index"])
-    checks.append(t.none_differ(base, "CORNER", t.compare(
-        "INT", "NOT_EQUAL", corner_vert.outputs[0],
-        t.sample(result, ids.SNAP_CORNER, "INT", "CORNER", index))))
-    face_corners = t.node("GeometryNodeCornersOfFace")
-    t.link(index, face_corners.inputs["Face Index"])
-    material = t.node("GeometryNodeInputMaterialIndex").outputs[0]
-    for value, name in ((face_corners.outputs["Total"], ids.SNAP_FACE_SIZE),
-                        (material, ids.SNAP_MATERIAL)):
-        checks.append(t.none_differ(base, "FACE", t.compare(
-            "INT", "NOT_EQUAL", value, t.sample(result, name, "INT", "FACE", index))))
-    return t.boolean("AND", *checks)
-
-
-def _strip_snapshot(t: _Tree, geometry):
-    """`geometry` without the SNAP_* attributes (they must not reach Apply or exports).
-
-    One wildcard removal where the node has a pattern mode (it warns about no
-    missing name); else one exact removal per name."""
-    remove = t.node("GeometryNodeRemoveAttribute")
-    mode = remove.inputs.get("Pattern Mode")
-    if mode is not None or hasattr(remove, "pattern_mode"):
-        if mode is not None:
-            mode.default_value = "Wildcard"
-        else:
-            remove.pattern_mode = "WILDCARD"
-        remove.inputs["Name"].default_value = ids.SNAPSHOT_PREFIX + "*"
-        t.link(geometry, remove.inputs["Geometry"])
-        return remove.outputs[0]
-    t.nodes.remove(remove)
-    for name in ids.SNAPSHOT_ATTRIBUTES:
-        remove = t.node("GeometryNodeRemoveAttribute")
-        remove.inputs["Name"].default_value = name
-        t.link(geometry, remove.inputs["Geometry"])
-        geometry = remove.outputs[0]
-    return geometry
+def _shown(t: Tree, gin, result):
+    """A result as shown: its weights in its vertex groups, its record removed."""
+    return node_fresh.strip_record(
+        t, node_fresh.with_groups(t, result, gin.outputs["Attribute Names"]))
 
 
 def build(group) -> None:
@@ -217,26 +88,34 @@ def build(group) -> None:
     itf = group.interface
     itf.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
     itf.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
-    sockets = {spec.key: _new_socket(itf, spec) for spec in ids.INTERNAL + ids.SETTINGS + ids.BUILT}
-    t = _Tree(group)
+    sockets = {spec.key: _new_socket(itf, spec) for spec in ids.INTERNAL + ids.SETTINGS}
+    t = Tree(group)
     gin, gout = t.node("NodeGroupInput"), t.node("NodeGroupOutput")
-    info = t.node("GeometryNodeObjectInfo", transform_space="ORIGINAL")  # base object's space
-    t.link(gin.outputs["Result"], info.inputs["Object"])
-    base, result = gin.outputs["Geometry"], info.outputs["Geometry"]
-    fresh = t.boolean("AND", _settings_fresh(t, gin, _menus(t, gin, sockets)),
-                      _geometry_fresh(t, base, result))
+    base = gin.outputs["Geometry"]
+    current = {spec.key: gin.outputs[spec.name] for spec in ids.SETTINGS}
+    current.update(_menus(t, gin, sockets))
+    results = {}
+    for key in ("result", "render_result"):  # Object Info in the base object's space
+        info = t.node("GeometryNodeObjectInfo", transform_space="ORIGINAL")
+        t.link(gin.outputs[[s.name for s in ids.INTERNAL if s.key == key][0]],
+               info.inputs["Object"])
+        results[key] = info.outputs["Geometry"]
     has_error = t.warning(t.compare("STRING", "NOT_EQUAL", gin.outputs["Error"], ""),
                           gin.outputs["Error"], "ERROR")
     no_error = t.boolean("NOT", has_error)
-    stale = t.warning(t.boolean("AND", no_error, t.boolean("NOT", fresh)), ids.STALE_MESSAGE,
-                      "WARNING")
-    repaired = t.warning(t.boolean("AND", no_error, fresh, t.compare(
+    view_fresh = _fresh(t, gin, base, results["result"], current, current["resolution"])
+    stale = t.warning(t.boolean("AND", no_error, t.boolean("NOT", view_fresh)),
+                      ids.STALE_MESSAGE, "WARNING")
+    repaired = t.warning(t.boolean("AND", no_error, view_fresh, t.compare(
         "STRING", "NOT_EQUAL", gin.outputs["Warning"], "")), gin.outputs["Warning"], "WARNING")
     used = t.boolean("OR", repaired, t.boolean("NOT", repaired))  # (evaluates the warning)
-    switch = t.node("GeometryNodeSwitch", input_type="GEOMETRY")
-    t.link(t.boolean("AND", no_error, t.boolean("NOT", stale), used), switch.inputs["Switch"])
-    t.link(base, switch.inputs["False"])
-    t.link(_strip_snapshot(t, result), switch.inputs["True"])
-    t.link(switch.outputs[0], gout.inputs[0])
-    for node, xy in ((gin, (-900, 0)), (info, (-600, 300)), (switch, (600, 0)), (gout, (1400, 0))):
-        node.location = xy
+    passed = node_fresh.channel(t, base, results["result"], gin.outputs["Attribute Names"])
+    view = t.switch("GEOMETRY", t.boolean("AND", no_error, t.boolean("NOT", stale), used),
+                    passed, _shown(t, gin, results["result"]))
+    render_fresh = _fresh(t, gin, base, results["render_result"], current,
+                          current["render_resolution"])
+    render = t.switch("GEOMETRY", t.boolean("AND", no_error, render_fresh), view,
+                      _shown(t, gin, results["render_result"]))
+    is_viewport = t.node("GeometryNodeIsViewport").outputs[0]
+    t.link(t.switch("GEOMETRY", is_viewport, render, view), gout.inputs[0])
+    gin.location, gout.location = (-900, 0), (1400, 0)

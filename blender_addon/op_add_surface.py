@@ -24,9 +24,11 @@ class OBJECT_OT_gerbs_add_surface(bpy.types.Operator):
     def execute(self, context):
         obj = context.active_object
         with Progress(window_manager=context.window_manager) as progress:
+            settings = settings_from(self)
+            if not self.properties.is_property_set("render_resolution"):
+                del settings["render_resolution"]  # renders follow the resolution given
             try:  # settings are validated by api.add_surface before anything is added
-                mod = api.add_surface(obj, progress=progress, raise_errors=False,
-                                      **settings_from(self))
+                mod = api.add_surface(obj, progress=progress, raise_errors=False, **settings)
             except ValueError as exc:
                 self.report({"ERROR"}, str(exc))
                 return {"CANCELLED"}

@@ -1,8 +1,8 @@
 """The hidden result objects: creating them, and removing what no modifier uses.
 
-Each GERBS modifier points at one result object through its hidden "Result"
-input (that pointer is the object's only user, so it is saved with the file and
-freed with the modifier). The result object and its mesh carry
+Each GERBS modifier points at two result objects through its hidden "Result"
+and "Render Result" inputs (that pointer is each object's only user, so they are
+saved with the file and freed with the modifier). The result object and its mesh carry
 ``ids.RESULT_TAG``; the node group carries ``ids.GROUP_TAG``. Garbage
 collection removes tagged objects, meshes and groups with no users: a removed
 or applied modifier, a deleted base object, a result object deleted by hand
@@ -30,30 +30,31 @@ def clear() -> None:
     _owners.clear()
 
 
-def new_result_object(obj):
-    mesh = bpy.data.meshes.new(f"{ids.RESULT_NAME} {obj.name}")
+def new_result_object(obj, render: bool = False):
+    mesh = bpy.data.meshes.new(f"{ids.RENDER_RESULT_NAME if render else ids.RESULT_NAME} {obj.name}")
     mesh[ids.RESULT_TAG] = True
     res = bpy.data.objects.new(mesh.name, mesh)
     res[ids.RESULT_TAG] = True
     return res
 
 
-def ensure_result(obj, mod, key: tuple, alive) -> tuple[object, bool]:
-    """The modifier's hidden result object and whether it is new.
+def ensure_result(obj, mod, key: tuple, alive, render: bool = False) -> tuple[object, bool]:
+    """The modifier's hidden result object (`render`: its render result) and whether it
+    is new.
 
     A new one is made if there is none, or if the result belongs to another
     live modifier (``alive(owner_key)``; e.g. the object was duplicated with its
     modifier, and both now point at one result).
     """
-    res = gn.get_result(mod)
+    res = gn.get_result(mod, render)
     if res is not None:
         owner = _owners.get(res.session_uid)
         if res.type != "MESH" or (owner is not None and owner != key and alive(owner)):
             res = None
     new = res is None
     if new:
-        res = new_result_object(obj)
-        gn.set_result(mod, res)
+        res = new_result_object(obj, render)
+        gn.set_result(mod, res, render)
         # an ID property write does not tag depsgraph relations; re-assigning the
         # group through RNA does, so the new object is evaluated in this update
         mod.node_group = mod.node_group

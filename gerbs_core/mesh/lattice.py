@@ -167,17 +167,32 @@ def _template(n: int, r: int):
 
 
 @lru_cache(maxsize=64)
-def _template_edges(n: int, r: int):
-    """Edges of the lattice triangles of an n-gon template (read-only arrays).
+def _template_faces(n: int, r: int, quads: bool = False) -> np.ndarray:
+    """Output faces of an n-gon template in template indices (read-only (k, m) array):
+    with `quads` a quad's r x r cells (m = 4; cell (i, j) -> (i+1, j) -> (i+1, j+1) ->
+    (i, j+1), counter-clockwise like the face), else the lattice triangles (m = 3)."""
+    tris = _template(n, r)[6]
+    if not (quads and n == 4):
+        return tris
+    c = r * r  # the triangles of a quad are (a, b, c) for every cell, then (a, c, d)
+    out = np.stack([tris[:c, 0], tris[:c, 1], tris[:c, 2], tris[c:, 2]], 1)
+    out.flags.writeable = False
+    return out
 
-    Returns (tedge (te, 2), tri_edge (t, 3), side (te,), seg (te,)): the distinct
+
+@lru_cache(maxsize=64)
+def _template_edges(n: int, r: int, quads: bool = False):
+    """Edges of the output faces of an n-gon template (:func:`_template_faces`; read-only).
+
+    Returns (tedge (te, 2), face_edge (k, m), side (te,), seg (te,)): the distinct
     undirected edges in template indices (repeated template points, e.g. an n-gon's
     centre, merged), the edge from corner i to corner i+1 of every template
-    triangle, and for edges along the polygon's side k (corner k -> k+1) side = k
+    face, and for edges along the polygon's side k (corner k -> k+1) side = k
     and seg = m, the segment from position m to m+1 counted from corner k; side =
     -1 for edges inside the polygon (these come first).
     """
-    uv, fan, kind, loc, pos, canon, tris = _template(n, r)
+    uv, fan, kind, loc, pos, canon, _ = _template(n, r)
+    tris = _template_faces(n, r, quads)
     npt = len(kind)
     _, first, inv = np.unique(np.stack([kind, loc, pos], 1), axis=0, return_index=True,
                               return_inverse=True)
@@ -360,18 +375,64 @@ class Lattice:
             fan_l[dest] = np.tile(fan, len(fk))
         return _ro(uv_l), _ro(fan_l)
 
-    def edges(self):
-        """(edge_verts (E_out, 2), corner_edges (T, 3)) int32 of the output triangle mesh,
-        from the lattice structure (no hashing of T*3 half-edges), or None where that
-        structure alone does not settle it (quads at resolution 1: two quads may
-        share a diagonal).
+    def _corner_counts(self, quads: bool) -> np.ndarray:
+        """(F,) output corners of each face: 4 r^2 for quads with `quads`, else 3 x its
+        triangles."""
+        sizes, r = self.topology.face_sizes, self.resolution
+        return np.where((sizes == 4) & quads, 4 * r * r, 3 * _face_counts(sizes, r)[1])
+
+    def polygons(self, quads: bool = True):
+        """The output faces: quads in quad faces (with `quads`), triangles elsewhere.
+
+        Returns read-only (offsets (Fo+1,), corners (Co,), face (Fo,), local (Co,)) int64:
+        output face o has the samples ``corners[offsets[o]:offsets[o+1]]`` (oriented
+        like its face, grouped by face in face order; with ``quads=False`` exactly
+        :attr:`triangles`), lies in mesh face ``face[o]``, and its corner c is the
+        entry ``local[c]`` of the local table (``local_sample[local[c]] ==
+        corners[c]``), whose parameters in that face interpolate per-corner values
+        (``corner_weights(local=True)[local]``): exact at the mesh's face corners.
+        """
+        key = bool(quads)
+        cache = self.__dict__.setdefault("_polygon_tables", {})
+        if key not in cache:
+            cache[key] = self._polygon_table(key)
+        return cache[key]
+
+    def _polygon_table(self, quads: bool):
+        tp, r = self.topology, self.resolution
+        ccount = self._corner_counts(quads)
+        coff = np.zeros(tp.n_faces + 1, dtype=np.int64)
+        np.cumsum(ccount, out=coff[1:])
+        fcount = np.where((tp.face_sizes == 4) & quads, r * r, _face_counts(tp.face_sizes, r)[1])
+        foff = np.zeros(tp.n_faces + 1, dtype=np.int64)
+        np.cumsum(fcount, out=foff[1:])
+        corners = np.empty(int(coff[-1]), dtype=np.int64)
+        local = np.empty(int(coff[-1]), dtype=np.int64)
+        sizes = np.empty(int(foff[-1]), dtype=np.int64)
+        for fk, G, _, n in self._parts:
+            tf = _template_faces(n, r, quads)
+            dest = (coff[fk][:, None] + np.arange(tf.size)).ravel()
+            corners[dest] = G[:, tf.ravel()].ravel()
+            local[dest] = (self.local_offsets[fk][:, None] + tf.ravel()).ravel()
+            sizes[(foff[fk][:, None] + np.arange(len(tf))).ravel()] = tf.shape[1]
+        offsets = np.zeros(len(sizes) + 1, dtype=np.int64)
+        np.cumsum(sizes, out=offsets[1:])
+        face = np.repeat(np.arange(tp.n_faces, dtype=np.int64), fcount)
+        return _ro(offsets), _ro(corners), _ro(face), _ro(local)
+
+    def edges(self, quads: bool = False):
+        """(edge_verts (E_out, 2), corner_edges) int32 of the output mesh, from the lattice
+        structure (no hashing of its half-edges), or None where that structure alone does
+        not settle it (triangulated quads at resolution 1: two quads may share a diagonal).
+
+        quads=False: the output triangles, ``corner_edges (T, 3)``; quads=True: the
+        faces of :meth:`polygons` (quads in quad faces), ``corner_edges (Co,)``.
 
         Numbering: the r segments of every mesh edge e first (e*r + j, segment j
         from ``edges[e,0]``), then the edges inside the faces, face-size class by
-        class, face by face. ``corner_edges[t, i]`` is the edge from
-        ``triangles[t, i]`` to ``triangles[t, (i+1) % 3]`` (Blender's corner_edge
-        convention). Every undirected edge of the triangles exactly once (tested
-        against a hash).
+        class, face by face. ``corner_edges[c]`` is the edge from corner c to the next
+        corner of its output face (Blender's corner_edge convention). Every undirected
+        edge of the output faces exactly once (tested against a hash).
 
         Why no hashing is needed: an edge inside a face joins two lattice points of
         that face; it can be another face's edge too only if both points lie on
@@ -382,25 +443,25 @@ class Lattice:
         tp, r = self.topology, self.resolution
         V, E = tp.n_vertices, tp.n_edges
         sizes, fo, fv = tp.face_sizes, tp.face_offsets, tp.face_vertices
-        if (r == 1 and np.any(sizes == 4)) or self.n_points >= 2 ** 31 - 1:
+        if (r == 1 and np.any(sizes == 4) and not quads) or self.n_points >= 2 ** 31 - 1:
             return None
         i32 = np.int32
         S = np.empty((E, r + 1), dtype=i32)  # samples along each mesh edge
         S[:, 0], S[:, r] = tp.edges[:, 0], tp.edges[:, 1]
         S[:, 1:r] = V + np.arange(E * (r - 1), dtype=i32).reshape(E, r - 1)
-        n_in = [int((_template_edges(n, r)[2] < 0).sum()) * len(fk)
+        n_in = [int((_template_edges(n, r, quads)[2] < 0).sum()) * len(fk)
                 for fk, _, _, n in self._parts]
         ev = np.empty((E * r + sum(n_in), 2), dtype=i32)
         ev[:E * r, 0] = S[:, :-1].ravel()
         ev[:E * r, 1] = S[:, 1:].ravel()
-        toff = np.zeros(tp.n_faces + 1, dtype=np.int64)
-        np.cumsum(_face_counts(sizes, r)[1], out=toff[1:])
-        ce = np.empty((self.n_triangles, 3), dtype=i32)
+        coff = np.zeros(tp.n_faces + 1, dtype=np.int64)
+        np.cumsum(self._corner_counts(quads), out=coff[1:])
+        ce = np.empty(int(coff[-1]), dtype=i32)
         inner_of = np.empty(tp.n_faces + 1, dtype=np.int64)  # first inner edge id per face
         inner_of[-1] = len(ev)
         base = E * r
         for (fk, G, _, n), cnt in zip(self._parts, n_in):
-            tedge, tri_edge, side, seg = _template_edges(n, r)
+            tedge, face_edge, side, seg = _template_edges(n, r, quads)
             ni = cnt // max(len(fk), 1)
             ids = np.empty((len(fk), len(tedge)), dtype=i32)
             ids[:, :ni] = base + np.arange(cnt, dtype=i32).reshape(len(fk), ni)
@@ -412,18 +473,19 @@ class Lattice:
             np.take(G.astype(i32), tedge[:ni].ravel(), axis=1, mode="clip",
                     out=ev[base:base + cnt].reshape(len(fk), 2 * ni))
             base += cnt
-            tri = np.take(ids, tri_edge.ravel(), axis=1).reshape(-1, 3)
+            got = np.take(ids, face_edge.ravel(), axis=1)  # (faces, corners of the template)
             if len(self._parts) == 1:
-                ce[:] = tri
+                ce[:] = got.ravel()
             else:
-                _scatter_rows(ce, (toff[fk][:, None] + np.arange(len(tri_edge))).ravel(), tri)
+                ce[(coff[fk][:, None] + np.arange(face_edge.size)).ravel()] = got.ravel()
         weak = np.flatnonzero(~np.asarray(tp.vertex_is_boundary, dtype=bool)
                               & (np.diff(tp.star_offsets) <= 2))
         if len(weak):  # merge repeated inner edges of the faces around them
             so, sc = tp.star_offsets, tp.star_corners
             faces = np.unique(tp.corner_face[np.concatenate(
                 [sc[so[w]:so[w + 1]] for w in weak.tolist()])])
-            nin = {n: int((_template_edges(n, r)[2] < 0).sum()) for _, _, _, n in self._parts}
+            nin = {n: int((_template_edges(n, r, quads)[2] < 0).sum())
+                   for _, _, _, n in self._parts}
             cand = np.concatenate([inner_of[f] + np.arange(nin[int(sizes[f])])
                                    for f in faces.tolist()])
             pair = np.sort(ev[cand], axis=1)
@@ -434,7 +496,7 @@ class Lattice:
                 keep = remap == np.arange(len(ev))
                 remap = (np.cumsum(keep, dtype=i32) - 1)[remap]
                 ev, ce = ev[keep], remap[ce]
-        return ev, ce
+        return ev, (ce if quads else ce.reshape(-1, 3))
 
     def template_params(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """(uv (m, 2), fan (m,)) of every lattice point of an n-gon in template order: the

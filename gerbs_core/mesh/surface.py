@@ -405,6 +405,12 @@ class BlendingSurface:
         if self._normals is not None:
             raise InvalidParameterError("normals", "stencils need normals=None (with Hermite "
                                         "normals the surface is not a linear map of X)")
+        return self.value_stencil(resolution)
+
+    def value_stencil(self, resolution: int) -> Stencil:
+        """The same linear map without the Hermite normals' projection (with normals=None
+        exactly :meth:`stencil`): carries vertex values (V, k) to the output points,
+        equal at the vertices, through the surface's own partition and fits."""
         from .assembly import assemble
         lat = self.lattice(resolution)
         cut = self.model.crease

@@ -101,12 +101,24 @@ def warnings(obj):
     return [(w.type, w.message) for w in obj.modifiers[0].node_warnings]
 
 
-def evaluated_triangles(obj) -> np.ndarray:
+def evaluated_faces(obj):
+    """(offsets (F+1,), corners (C,)) of the object's final evaluated mesh."""
     dg = bpy.context.evaluated_depsgraph_get()
-    mesh = obj.evaluated_get(dg).data
-    loops = np.empty(len(mesh.loops), dtype=np.int32)
-    mesh.loops.foreach_get("vertex_index", loops)
-    return loops.reshape(-1, 3)
+    return topology(obj.evaluated_get(dg).data)
+
+
+def evaluated_triangles(obj) -> np.ndarray:
+    """The final evaluated mesh's faces as triangles (quads split (a, b, c), (a, c, d))."""
+    offsets, corners = evaluated_faces(obj)
+    return triangulate(offsets, corners)
+
+
+def triangulate(offsets, corners) -> np.ndarray:
+    """Fan triangles of CSR polygons, (T, 3)."""
+    out = []
+    for a, b in zip(offsets[:-1].tolist(), offsets[1:].tolist()):
+        out.extend((corners[a], corners[k], corners[k + 1]) for k in range(a + 1, b - 1))
+    return np.array(out, dtype=np.int64).reshape(-1, 3)
 
 
 def face_rings(offsets, corners, n_vertices, w, kmax=6) -> np.ndarray:

@@ -137,9 +137,10 @@ def test_native_apply_right_after_a_frame_change_bakes_the_current_surface(blend
 
 
 def _point_sets_equal(P, Q, tol=1e-5):
-    assert P.shape == Q.shape
-    d, _ = cKDTree(P).query(Q)
-    assert d.max() <= tol
+    """The same points (an exporter splits vertices at flat faces and UV seams, so Q may
+    hold some of them more than once)."""
+    assert len(Q) >= len(P)
+    assert cKDTree(P).query(Q)[0].max() <= tol and cKDTree(Q).query(P)[0].max() <= tol
 
 
 @pytest.mark.parametrize("ext", [".glb", ".obj"])

@@ -3,7 +3,8 @@ import bpy
 import numpy as np
 import pytest
 
-from .helpers import evaluated, evaluated_triangles, make_object, positions, topology
+from .helpers import (evaluated, evaluated_faces, evaluated_triangles, make_object, positions,
+                      topology)
 
 pytestmark = pytest.mark.blender
 
@@ -28,10 +29,14 @@ def test_surface_counts_and_interpolation(blender, kind):
     assert len(P) == V + E * (R - 1) + interior.sum()
     # every base vertex is an output point (first V samples), to float32 precision
     assert np.abs(P[:V] - X).max() <= 1e-6
-    # output triangles: T = sum of per-face lattice triangles, all indices valid
-    T = evaluated_triangles(obj)
-    tris = np.where(sizes == 3, R * R, np.where(sizes == 4, 2 * R * R, sizes * R * R)).sum()
-    assert len(T) == tris and T.max() < len(P)
+    # output faces, like Subdivision Surface: r x r quads in every quad, r^2 triangles in
+    # every triangle, n r^2 triangles in an n-gon's fan; all indices valid
+    out_offsets, out_corners = evaluated_faces(obj)
+    out_sizes = np.diff(out_offsets)
+    want = np.where(sizes == 4, R * R, np.where(sizes == 3, R * R, sizes * R * R))
+    assert len(out_sizes) == want.sum() and out_corners.max() < len(P)
+    assert np.array_equal(np.sort(out_sizes), np.sort(np.repeat(np.where(sizes == 4, 4, 3), want)))
+    assert len(evaluated_triangles(obj)) == np.where(sizes == 4, 2 * R * R, want).sum()
     # the base mesh itself is untouched
     assert np.array_equal(positions(obj.data), X)
     o2, c2 = topology(obj.data)
@@ -83,13 +88,13 @@ def test_materials_follow_the_faces(blender):
     index[::3] = 1
     obj.data.polygons.foreach_set("material_index", index)
     obj.data.update()
-    api.add_surface(obj, resolution=2)  # quads: 8 triangles per face, faces in order
+    api.add_surface(obj, resolution=2)  # quads: 4 quads per face, faces in order
     dg = bpy.context.evaluated_depsgraph_get()
     mesh = obj.evaluated_get(dg).data
     got = np.empty(len(mesh.polygons), dtype=np.int32)
     mesh.polygons.foreach_get("material_index", got)
     assert [m.name for m in mesh.materials] == ["red", "blue"]
-    assert np.bincount(got).tolist() == [8 * int((index == 0).sum()), 8 * int((index == 1).sum())]
+    assert np.bincount(got).tolist() == [4 * int((index == 0).sum()), 4 * int((index == 1).sum())]
 
 
 def test_visibility_toggle_shows_base_or_surface(blender):

@@ -212,3 +212,100 @@ def test_bad_resolution_and_memory_limit():
     assert str(output_counts(T, 10)[0]) in str(info.value)
     with pytest.raises(InvalidParameterError):
         Lattice(T, 2).map_to_polygon(np.zeros((5, 2)))
+
+
+def _polygon_edge_keys(L, offsets, corners):
+    """Brute force: the key of the edge from each output corner to the next corner of its
+    output face, and the sorted distinct keys."""
+    nxt = np.arange(len(corners)) + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]  # the last corner of each face -> its first
+    a, b = corners, corners[nxt]
+    key = np.minimum(a, b) * L.n_points + np.maximum(a, b)
+    return np.unique(key), key
+
+
+@pytest.mark.parametrize("name", list(MESHES))
+@pytest.mark.parametrize("r", [1, 2, 3])
+def test_polygons_are_quads_in_quad_faces_and_the_triangles_elsewhere(name, r):
+    v, T, L = _build(name, r)
+    off, corners, face, local = L.polygons(quads=False)
+    assert np.array_equal(off, 3 * np.arange(L.n_triangles + 1))
+    assert np.array_equal(corners, L.triangles.ravel()) and np.array_equal(face, L.triangle_face)
+    assert np.array_equal(L.local_sample[local], corners)
+    off, corners, face, local = L.polygons()
+    sizes = np.diff(off)
+    quad = T.face_sizes[face] == 4
+    assert np.all(sizes[quad] == 4) and np.all(sizes[~quad] == 3)
+    assert np.bincount(face, minlength=T.n_faces).tolist() == np.where(
+        T.face_sizes == 4, r * r, np.where(T.face_sizes == 3, r * r, T.face_sizes * r * r)).tolist()
+    # each corner is a lattice point of its own face, and the sample it names
+    corner_face = np.repeat(face, sizes)
+    assert np.array_equal(L.local_face[local], corner_face)
+    assert np.array_equal(L.local_sample[local], corners)
+    # a quad (a, b, c, d) is exactly the lattice triangles (a, b, c), (a, c, d) of its face
+    q = corners[(off[:-1][quad][:, None] + np.arange(4))]
+    split = np.sort(np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]]), axis=1)
+    tq = np.sort(L.triangles[T.face_sizes[L.triangle_face] == 4], axis=1)
+    assert np.array_equal(np.unique(split, axis=0), np.unique(tq, axis=0)) and len(split) == len(tq)
+    # watertight and consistently oriented; Euler characteristic of the mesh
+    nxt = np.arange(len(corners)) + 1
+    nxt[off[1:] - 1] = off[:-1]
+    directed = Counter(zip(corners.tolist(), corners[nxt].tolist()))
+    assert max(directed.values()) == 1
+    und = {tuple(sorted(e)) for e in directed}
+    assert L.n_points - len(und) + len(face) == T.euler_characteristic
+    for a in L.polygons():
+        with pytest.raises(ValueError):
+            a[0] = a[0]
+
+
+@pytest.mark.parametrize("name", list(MESHES))
+@pytest.mark.parametrize("r", [1, 2, 4])
+def test_corner_values_interpolate_per_face_and_are_exact_at_face_corners(name, r):
+    """Per-corner values (a UV map with a seam at every edge: random values per face
+    corner) carried to the output corners by the corner weights: at a mesh vertex each
+    output corner gets its own face's value exactly; inside, the bilinear/barycentric
+    blend of its face's corners (constants and the face's own linear data reproduced)."""
+    v, T, L = _build(name, r)
+    off, corners, face, local = L.polygons()
+    W = L.corner_weights(local=True)[local]  # (Co, n_max)
+    cf = L.local_face[local]
+    fo, sizes = T.face_offsets, T.face_sizes
+    slot = np.arange(W.shape[1])
+    valid = slot[None, :] < sizes[cf][:, None]
+    assert np.all(W[~valid] == 0) and np.allclose(W.sum(1), 1.0, atol=1e-14)
+    rng = np.random.default_rng(3)
+    values = rng.normal(size=(T.n_corners, 2))
+    idx = np.where(valid, fo[cf][:, None] + slot, 0)
+    out = np.einsum("ck,ckd->cd", W, values[idx])
+    at_vertex = corners < T.n_vertices
+    k = np.argmax(valid & (T.face_vertices[idx] == corners[:, None]), axis=1)
+    np.testing.assert_array_equal(out[at_vertex], values[idx[at_vertex, k[at_vertex]]])
+    # the positions of the face's corners, carried the same way, are map_to_polygon
+    Xc = v[T.face_vertices]
+    np.testing.assert_allclose(np.einsum("ck,ckd->cd", W, Xc[idx]),
+                               L.map_to_polygon(Xc, local=True)[local], atol=1e-14)
+    # a broken variant (the weights of the neighbouring lattice point) is caught
+    bad = np.einsum("ck,ckd->cd", L.corner_weights(local=True)[np.minimum(local + 1, len(L.local_face) - 1)], values[idx])
+    assert not np.array_equal(bad[at_vertex], out[at_vertex])
+
+
+@pytest.mark.parametrize("name", list(MESHES) + ["valence2"])
+@pytest.mark.parametrize("r", [1, 2, 5])
+def test_polygon_edges_equal_hashed_edges(name, r):
+    if name == "valence2":  # vertex 1 interior with valence 2 (the repeated-edge case)
+        T = MeshTopology([[0, 1, 2, 3], [2, 1, 0, 4]], 5)
+        L = Lattice(T, r)
+    else:
+        v, T, L = _build(name, r)
+    off, corners, face, local = L.polygons()
+    ev, ce = L.edges(quads=True)
+    want, corner_keys = _polygon_edge_keys(L, off, corners)
+    ev = np.asarray(ev, dtype=np.int64)
+    got = np.minimum(ev[:, 0], ev[:, 1]) * L.n_points + np.maximum(ev[:, 0], ev[:, 1])
+    assert len(np.unique(got)) == len(got)  # no edge twice
+    assert np.array_equal(np.sort(got), want)  # every output face edge, nothing else
+    assert ce.shape == corners.shape and np.array_equal(got[ce], corner_keys)
+    # the first E r edges are the segments of the mesh edges, in order
+    seg = ev[:T.n_edges * r].reshape(T.n_edges, r, 2)
+    assert np.array_equal(seg[:, 0, 0], T.edges[:, 0]) and np.array_equal(seg[:, -1, 1], T.edges[:, 1])

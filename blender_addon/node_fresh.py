@@ -1,0 +1,174 @@
+"""The node group's checks that a result is fresh, and what it passes on.
+
+A result (the geometry of the hidden result object) is *fresh* when its record
+(snapshot.py) equals, exactly, what the modifier receives now::
+
+    counts (V, F, C, E) == the record's
+    and every position, corner vertex, face size, material index and edge's vertices
+        == the record's at the same index
+    and every carried layer i: the input's attribute (name from "Attribute Names",
+        domain and type from the result's layer table) exists and equals the record's
+        values, element by element (a repeat zone over the layers)
+    and every recorded setting == the current one ("resolution" the one asked for)
+
+Also here: writing the carried vertex-group weights into the result's vertex groups
+(Store Named Attribute into a name that is a vertex group of the geometry writes the
+group), and the *channel*: while no surface is shown, the input passes on with its
+positions (and its vertex-group weights) copied into hidden attributes, which
+deform-only modifiers below GERBS leave alone, so the add-on can read what GERBS
+received from the final mesh.
+"""
+from __future__ import annotations
+
+from . import ids
+
+_CHECK_TYPES = (("FLOAT_VECTOR", "VECTOR"), ("FLOAT_COLOR", "RGBA"), ("INT", "INT"))
+
+
+def settings_fresh(t, result, current: dict, resolution):
+    """Every recorded setting equals the current one (`current`: key -> socket;
+    `resolution`: the socket of the resolution this result is for)."""
+    checks = []
+    for k, spec in enumerate(ids.RECORD_SETTINGS):
+        value = resolution if spec.key == "resolution" else current[spec.key]
+        checks.append(t.compare("FLOAT", "EQUAL", value,
+                                t.sample(result, f"{ids.SNAP_SETTINGS}{k}", "FLOAT", "POINT", 0)))
+    return t.boolean("AND", *checks)
+
+
+def _differs(t, compare, value, stored):
+    """`value` differs from `stored` or is not a number: the Compare node's |a - b| > 0
+    is False for NaN, so a NaN is caught by its inequality with itself."""
+    return t.boolean("OR", t.compare(compare, "NOT_EQUAL", value, stored),
+                     t.boolean("NOT", t.compare(compare, "EQUAL", value, value)))
+
+
+def geometry_fresh(t, base, result):
+    """Exact equality of the base geometry with the record on the result."""
+    size = t.node("GeometryNodeAttributeDomainSize", component="MESH")
+    t.link(base, size.inputs["Geometry"])
+    counts = ("Point Count", "Face Count", "Face Corner Count", "Edge Count")
+    checks = [t.compare("INT", "EQUAL", size.outputs[name],
+                        t.sample(result, f"{ids.SNAP_COUNT}{k}", "INT", "POINT", 0))
+              for k, name in enumerate(counts)]
+    index = t.index()
+    position = t.node("GeometryNodeInputPosition").outputs[0]
+    checks.append(t.none_differ(base, "POINT", _differs(
+        t, "VECTOR", position,
+        t.sample(result, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", index))))
+    corner_vert = t.node("GeometryNodeVertexOfCorner")
+    t.link(index, corner_vert.inputs["Corner Index"])
+    checks.append(t.none_differ(base, "CORNER", t.compare(
+        "INT", "NOT_EQUAL", corner_vert.outputs[0],
+        t.sample(result, ids.SNAP_CORNER, "INT", "CORNER", index))))
+    face_corners = t.node("GeometryNodeCornersOfFace")
+    t.link(index, face_corners.inputs["Face Index"])
+    material = t.node("GeometryNodeInputMaterialIndex").outputs[0]
+    for value, name in ((face_corners.outputs["Total"], ids.SNAP_FACE_SIZE),
+                        (material, ids.SNAP_MATERIAL)):
+        checks.append(t.none_differ(base, "FACE", t.compare(
+            "INT", "NOT_EQUAL", value, t.sample(result, name, "INT", "FACE", index))))
+    ends = t.node("GeometryNodeInputMeshEdgeVertices")
+    differ = t.boolean("OR", *(t.compare("INT", "NOT_EQUAL", ends.outputs[out],
+                                         t.sample(result, name, "INT", "EDGE", index))
+                               for out, name in (("Vertex Index 1", ids.SNAP_EDGE_A),
+                                                 ("Vertex Index 2", ids.SNAP_EDGE_B))))
+    checks.append(t.none_differ(base, "EDGE", differ))
+    return t.boolean("AND", *checks)
+
+
+def _layer(t, result, names, i):
+    """(name, check branch, is a group) of carried layer `i` (a socket) of `result`."""
+    row = [t.sample(result, ids.SNAP_LAYERS, "INT", "POINT", t.math("MULTIPLY_ADD", i, 4.0, k))
+           for k in range(4)]
+    return t.slice(names, row[0], row[1]), row[2], t.compare("INT", "EQUAL", row[3], 1)
+
+
+def _count(t, result, k):
+    return t.sample(result, f"{ids.SNAP_COUNT}{k}", "INT", "POINT", 0)
+
+
+def _layer_equal(t, base, result, name, record, kind, domain):
+    """The input's attribute `name` exists and equals the `record` attribute of `result`
+    on `domain`, compared as the Named Attribute type of `kind`."""
+    data_type, compare = _CHECK_TYPES[kind]
+    value, exists = t.named(name, data_type)
+    stored = t.sample(result, record, data_type, domain, t.index())
+    unequal = _differs(t, compare, value, stored) if compare != "INT" else \
+        t.compare(compare, "NOT_EQUAL", value, stored)
+    differs = t.boolean("OR", t.boolean("NOT", exists), unequal)
+    return t.none_differ(base, domain, differs)
+
+
+def layers_fresh(t, base, result, names):
+    """Every carried layer recorded on `result` equals the input's (a repeat zone)."""
+    zin, zout, inner = t.repeat(_count(t, result, 4), [("Fresh", "BOOLEAN", True),
+                                                       ("Layer", "INT", 0)])
+    i = inner["Layer"]
+    name, branch, _ = _layer(t, result, names, i)
+    record = t.string_join(ids.SNAP_LAYER, t.number_string(i))
+    checks = [_layer_equal(t, base, result, name, record, kind, domain)
+              for kind in range(len(_CHECK_TYPES)) for domain in ids.DOMAINS]
+    equal = t.index_switch("BOOLEAN", branch, checks)
+    t.link(t.boolean("AND", inner["Fresh"], equal), zout.inputs["Fresh"])
+    t.link(t.math("ADD", i, 1.0), zout.inputs["Layer"])
+    return zout.outputs["Fresh"]
+
+
+def _group_loop(t, geometry, table, names, target, source):
+    """`geometry` with, for every vertex-group layer i of `table`'s record, the POINT
+    FLOAT attribute ``target(i, name)`` := ``source(i, name)``."""
+    zin, zout, inner = t.repeat(_count(t, table, 4), [("Geometry", "GEOMETRY", None),
+                                                      ("Layer", "INT", 0)])
+    t.link(geometry, zin.inputs["Geometry"])
+    i = inner["Layer"]
+    name, _, group = _layer(t, table, names, i)
+    stored = t.store(inner["Geometry"], target(i, name), "FLOAT", "POINT", source(i, name))
+    t.link(t.switch("GEOMETRY", group, inner["Geometry"], stored), zout.inputs["Geometry"])
+    t.link(t.math("ADD", i, 1.0), zout.inputs["Layer"])
+    return zout.outputs["Geometry"]
+
+
+def with_groups(t, result, names):
+    """The result with its carried weights (``ids.OUT_WEIGHT`` + i) in its vertex groups."""
+    return _group_loop(
+        t, result, result, names, target=lambda i, name: name,
+        source=lambda i, name: t.named(t.string_join(ids.OUT_WEIGHT, t.number_string(i)),
+                                       "FLOAT")[0])
+
+
+def channel(t, base, table, names):
+    """The input as passed on while no surface is shown: its positions in
+    ``ids.CHANNEL_POSITION`` and, for the vertex-group layers of `table`'s record, their
+    weights in ``ids.CHANNEL_WEIGHT`` + i."""
+    position = t.node("GeometryNodeInputPosition").outputs[0]
+    geometry = t.store(base, ids.CHANNEL_POSITION, "FLOAT_VECTOR", "POINT", position)
+    return _group_loop(
+        t, geometry, table, names,
+        target=lambda i, name: t.string_join(ids.CHANNEL_WEIGHT, t.number_string(i)),
+        source=lambda i, name: t.named(name, "FLOAT")[0])
+
+
+def strip_record(t, geometry):
+    """`geometry` without the record (it must not reach Apply or exports).
+
+    One wildcard removal where the node has a pattern mode (it warns about no
+    missing name); else one exact removal per fixed name (the per-layer records then
+    stay, hidden)."""
+    remove = t.node("GeometryNodeRemoveAttribute")
+    mode = remove.inputs.get("Pattern Mode")
+    if mode is not None or hasattr(remove, "pattern_mode"):
+        if mode is not None:
+            mode.default_value = "Wildcard"
+        else:
+            remove.pattern_mode = "WILDCARD"
+        remove.inputs["Name"].default_value = ids.SNAPSHOT_PREFIX + "*"
+        t.link(geometry, remove.inputs["Geometry"])
+        return remove.outputs[0]
+    t.nodes.remove(remove)
+    for name in ids.record_names():
+        remove = t.node("GeometryNodeRemoveAttribute")
+        remove.inputs["Name"].default_value = name
+        t.link(geometry, remove.inputs["Geometry"])
+        geometry = remove.outputs[0]
+    return geometry

@@ -1,0 +1,142 @@
+"""What the modifier receives from the stack, read without touching the user's mesh.
+
+The modifier builds on exactly what Blender delivers to it: shape keys with their
+values, vertex-group masks and Edit Mode display (the active key, or the mix
+with "Shape Key Edit Mode"), animation and drivers, and every modifier above it.
+Reading it never touches the user's mesh (mesh_io): it comes from
+
+* the final mesh, when every enabled modifier below GERBS only moves vertices
+  (``ids.DEFORM_ONLY``: Armature, Lattice, ...) or there is none: while the node
+  group shows no surface it passes its input on with the positions (and
+  vertex-group weights) it received copied into hidden attributes
+  (node_fresh.channel), which those modifiers leave alone; while it shows a result
+  the final mesh carries no such attribute and the input is the result's record
+  (the node group checked it equal);
+* otherwise (a modifier below that changes the mesh, e.g. Triangulate), the mesh
+  data-block as evaluated (its BMesh, copied in C, in Edit Mode): that is what the
+  modifier receives only with no shape keys and no modifier above it; else the
+  modifier refuses with a message naming them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import attributes, ids, mesh_io
+from .errors import PREFIX
+
+FRESH = "fresh"  # read_input: the modifier shows a result (its record is the input)
+
+
+@dataclass(frozen=True)
+class Stack:
+    """The enabled modifiers around the GERBS modifier for one evaluation."""
+
+    above: tuple
+    after: tuple
+    enabled: bool  # the GERBS modifier itself is evaluated
+    render: bool
+    edit: bool
+
+    @property
+    def deform_after(self) -> bool:
+        return all(m.type in ids.DEFORM_ONLY for m in self.after)
+
+
+def _enabled(mod, edit: bool, render: bool) -> bool:
+    return (mod.show_render if render else mod.show_viewport) and (
+        not edit or mod.show_in_editmode)
+
+
+def stack_of(obj, mod, render: bool) -> Stack:
+    edit = obj.mode == "EDIT" and not render
+    mods = list(obj.modifiers)
+    k = mods.index(mod)
+    return Stack(tuple(m for m in mods[:k] if _enabled(m, edit, render)),
+                 tuple(m for m in mods[k + 1:] if _enabled(m, edit, render)),
+                 _enabled(mod, edit, render), render, edit)
+
+
+def group_names(obj) -> list:
+    return [g.name for g in obj.vertex_groups]
+
+
+def _read_final(final, groups, normals, known):
+    attr = final.attributes.get(ids.CHANNEL_POSITION)
+    if attr is None or attr.domain != "POINT" or attr.data_type != "FLOAT_VECTOR":
+        return FRESH
+    positions = np.empty(len(final.vertices) * 3, dtype=np.float32)
+    attr.data.foreach_get("vector", positions)
+    inp = mesh_io.read_mesh(final, normals, positions.reshape(-1, 3))
+    channel = _group_channel(known, groups)
+    return inp.with_carried(attributes.read_carried(final, groups, channel))
+
+
+def _group_channel(known, groups) -> dict:
+    """group index (in `groups`) -> channel attribute, for groups the last input had."""
+    if known is None or known.carried is None:
+        return {}
+    out = {}
+    for i, layer in enumerate(known.carried.layers):
+        if layer.group and layer.name in groups:
+            out[groups.index(layer.name)] = f"{ids.CHANNEL_WEIGHT}{i}"
+    return out
+
+
+def unhonoured_message(obj, stack: Stack) -> str:
+    keys = obj.data.shape_keys
+    parts = [f"modifier{'s' if len(stack.above) > 1 else ''} "
+             f"{', '.join(m.name for m in stack.above)}" if stack.above else "",
+             "shape keys" if keys is not None and len(keys.key_blocks) > 1 else ""]
+    ignored = " and ".join(p for p in parts if p)
+    below = ", ".join(m.name for m in stack.after if m.type not in ids.DEFORM_ONLY)
+    return (f"{PREFIX}{below} below it changes the mesh, so GERBS cannot see what it "
+            f"receives and would ignore the {ignored}; move {below} above GERBS or GERBS "
+            f"last")
+
+
+def read_input(obj, mod, depsgraph, normals: bool, known=None):
+    """What `mod` receives now: ``(MeshInput with carried, "")``, ``(FRESH, "")`` while it
+    shows a result, ``(None, "")`` when it is not evaluated, or ``(None, message)``.
+    `known`: the last input read (its vertex-group layers tell the channel's names)."""
+    stack = stack_of(obj, mod, depsgraph.mode == "RENDER")
+    if not stack.enabled:
+        return None, ""
+    groups = group_names(obj)
+    obj_eval = obj.evaluated_get(depsgraph)
+    if stack.deform_after and obj_eval.is_evaluated:
+        final = obj_eval.to_mesh() if stack.edit else obj_eval.data
+        try:
+            return _read_final(final, groups, normals, known), ""
+        finally:
+            if stack.edit:
+                obj_eval.to_mesh_clear()
+    keys = obj.data.shape_keys
+    if stack.above or (keys is not None and len(keys.key_blocks) > 1):
+        return None, unhonoured_message(obj, stack)
+    return read_base(obj, depsgraph, normals), ""
+
+
+def read_base(obj, depsgraph, normals: bool, carried_only: bool = False):
+    """The mesh data-block itself as evaluated (in Edit Mode its BMesh): the input when no
+    shape key and no modifier above changes it."""
+    groups = group_names(obj)
+    if obj.mode == "EDIT":
+        with mesh_io.edit_mesh_copy(obj.data) as tmp:
+            return _base_of(tmp, groups, normals, carried_only)
+    return _base_of(obj.data.evaluated_get(depsgraph), groups, normals, carried_only)
+
+
+def _base_of(mesh, groups, normals, carried_only):
+    carried = attributes.read_carried(mesh, groups)
+    if carried_only:
+        return carried
+    return mesh_io.read_mesh(mesh, normals).with_carried(carried)
+
+
+def base_names(obj, depsgraph) -> set:
+    """The names the mesh data-block itself would carry (cheap: no values read; in Edit
+    Mode the BMesh's layers, which is all the original mesh's attributes hold then)."""
+    mesh = obj.data if obj.mode == "EDIT" else obj.data.evaluated_get(depsgraph)
+    return attributes.names_of(mesh, group_names(obj))

@@ -1,0 +1,111 @@
+"""The panel in a modeller's words (issue 13, item 4): only the chosen kernel's parameters,
+tooltips on the modifier's inputs, an error line that fits, and the select operator."""
+import bmesh
+import bpy
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.blender
+
+
+def _keys(rows):
+    return [key for _, key, _ in rows]
+
+
+def test_the_panel_shows_only_the_chosen_kernels_parameters(blender):
+    from blender_addon import api, ids, panels
+
+    bpy.ops.mesh.primitive_cube_add()
+    obj = bpy.context.active_object
+    mod = api.add_surface(obj, resolution=2)
+    every = {k for params in ids.KERNEL_PARAMETERS.values() for k in params}
+    for kernel in ids.KERNELS:
+        api.set_settings(obj, kernel=kernel)
+        shown = _keys(panels.panel_rows(obj, mod)["settings"])
+        assert every & set(shown) == set(ids.KERNEL_PARAMETERS[kernel]), kernel
+        assert shown[:3] == ["resolution", "render_resolution", "kernel"]
+        assert {"boundary", "rest", "use_normals"} <= set(shown)
+    # every setting is drawn by the panel (hidden in the modifier's own list), with a
+    # tooltip saying what it does
+    items = {i.name: i for i in mod.node_group.interface.items_tree
+             if getattr(i, "in_out", None) == "INPUT" and i.name != "Geometry"}
+    for spec in ids.SETTINGS:
+        assert items[spec.name].hide_in_modifier
+        assert items[spec.name].description == spec.description and len(spec.description) > 30
+
+
+def _nan_vertex(obj, index):
+    co = obj.data.vertices[index].co
+    co.x = float("nan")
+    obj.data.update()
+
+
+def test_the_error_line_fits_the_panel_and_the_operator_selects_the_problem(blender):
+    """An invalid coordinate: the panel's error is a short sentence in lines that fit its
+    width; the operator enters Edit Mode with exactly the offending vertex selected."""
+    from blender_addon import api, ids, panels, problems
+
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1)
+    obj = bpy.context.active_object
+    mod = api.add_surface(obj, resolution=2)
+    assert not bpy.ops.object.gerbs_select_problem.poll()  # nothing to select
+    _nan_vertex(obj, 5)
+    api.update(obj, raise_errors=False)
+    assert api.status(obj)["error"]
+    for width in (180.0, 300.0, 600.0):
+        rows = panels.panel_rows(obj, mod, width_px=width)
+        limit = max(20, int(width / 7.0) - 4)
+        assert rows["error"] and all(len(line) <= limit for line in rows["error"])
+        assert rows["select"]
+    text = " ".join(panels.panel_rows(obj, mod)["error"])
+    assert text.startswith("The mesh has 1 vertex") and "NaN" in text
+    assert len(problems.wrap(text, 180.0)) > len(problems.wrap(text, 600.0))
+    assert bpy.ops.object.gerbs_select_problem.poll()
+    bpy.ops.object.gerbs_select_problem()
+    assert obj.mode == "EDIT"
+    bm = bmesh.from_edit_mesh(obj.data)
+    assert [v.index for v in bm.verts if v.select] == [5]
+    assert not any(f.select for f in bm.faces)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert ids.OP_SELECT_PROBLEM == "object.gerbs_select_problem"
+
+
+def test_a_problem_made_above_gerbs_is_not_selected_on_the_base_mesh(blender):
+    """Indices of a mesh a modifier above makes name no elements of the base mesh: the
+    panel says where to fix it and offers no selection."""
+    from blender_addon import api, panels
+
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1)
+    obj = bpy.context.active_object
+    obj.modifiers.new("Displace", "DISPLACE").strength = float("nan")
+    mod = api.add_surface(obj, resolution=2, raise_errors=False)
+    rows = panels.panel_rows(obj, mod)
+    assert rows["error"] and not rows["select"]
+    assert "modifiers above GERBS" in " ".join(rows["error"])
+    assert not bpy.ops.object.gerbs_select_problem.poll()
+    assert np.isfinite(np.array([v.co for v in obj.data.vertices])).all()
+
+
+def test_the_warning_line_selects_what_the_repair_changed(blender):
+    """A loose vertex (left out by the repair): the panel's warning line names it, wrapped
+    to the panel, and the operator selects exactly that vertex."""
+    from blender_addon import api, panels
+
+    from .helpers import link_object
+
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1)
+    ico = bpy.context.active_object
+    X = np.array([v.co[:] for v in ico.evaluated_get(
+        bpy.context.evaluated_depsgraph_get()).data.vertices])
+    faces = [[v + (v >= 3) for v in p.vertices] for p in ico.data.polygons]
+    bpy.data.objects.remove(ico)
+    obj = link_object("loose", np.insert(X, 3, [4.0, 0.0, 0.0], axis=0), faces)
+    mod = api.add_surface(obj, resolution=2)
+    rows = panels.panel_rows(obj, mod, width_px=220.0)
+    assert not rows["error"] and rows["warning"] and rows["select"]
+    assert "unused_vertex" in " ".join(rows["warning"])
+    assert all(len(line) <= max(20, int(220.0 / 7.0) - 4) for line in rows["warning"])
+    bpy.ops.object.gerbs_select_problem()
+    bm = bmesh.from_edit_mesh(obj.data)
+    assert [v.index for v in bm.verts if v.select] == [3]
+    bpy.ops.object.mode_set(mode="OBJECT")
