@@ -71,16 +71,12 @@ def _menus(t: Tree, gin, sockets) -> dict:
 
 
 def _fresh(t: Tree, gin, base, result, current, resolution):
-    names = gin.outputs["Attribute Names"]
-    return t.boolean("AND", node_fresh.settings_fresh(t, result, current, resolution),
-                     node_fresh.geometry_fresh(t, base, result),
-                     node_fresh.layers_fresh(t, base, result, names))
+    return node_fresh.fresh(t, base, result, gin.outputs["Attribute Names"], current, resolution)
 
 
 def _shown(t: Tree, gin, result):
     """A result as shown: its weights in its vertex groups, its record removed."""
-    return node_fresh.strip_record(
-        t, node_fresh.with_groups(t, result, gin.outputs["Attribute Names"]))
+    return node_fresh.shown(t, result, gin.outputs["Attribute Names"])
 
 
 def build(group) -> None:
