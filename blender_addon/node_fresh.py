@@ -17,6 +17,10 @@ group), and the *channel*: while no surface is shown, the input passes on with i
 positions (and its vertex-group weights) copied into hidden attributes, which
 deform-only modifiers below GERBS leave alone, so the add-on can read what GERBS
 received from the final mesh.
+
+The public builders (:func:`fresh`, :func:`shown`, :func:`channel`) add one Group node
+per check, using the nested groups (node_parts.py) they build on first use: one per
+check, and one per layer type and domain for the layer comparison.
 """
 from __future__ import annotations
 
@@ -39,10 +43,12 @@ def fresh(t, base, result, names, current: dict, resolution):
 
 
 def _settings_part():
+    """Inputs: the result and every recorded setting as a float (as the check compares)."""
+    def build(t, gin, gout):
+        current = {s.key: gin[s.name] for s in ids.RECORD_SETTINGS}
+        t.link(settings_fresh(t, gin["Result"], current), gout["Fresh"])
     inputs = [("Result", _GEO)] + [(s.name, "NodeSocketFloat") for s in ids.RECORD_SETTINGS]
-    return node_parts.ensure("Settings Fresh", inputs, [("Fresh", _BOOL)], lambda t, gin, gout: t.link(
-        settings_fresh(t, gin["Result"], {s.key: gin[s.name] for s in ids.RECORD_SETTINGS}),
-        gout["Fresh"]))
+    return node_parts.ensure("Settings Fresh", inputs, [("Fresh", _BOOL)], build)
 
 
 def _geometry_part():

@@ -21,6 +21,10 @@ result: a file opened without the add-on, a frame change the add-on missed,
 rebuild the result within the same depsgraph update and the second evaluation
 shows it. Switch nodes are lazy, so the viewport never reads the render result.
 
+The checks and the shown result are nested groups (node_parts.py, built by
+node_fresh.py), one Group node each here: Blender builds a tree in time quadratic
+in its node count, and each check is used twice (viewport and render result).
+
 Every setting is hidden in the modifier's own input list: the add-on's panel
 draws them (only the chosen kernel's parameters), panels.py.
 """
