@@ -35,6 +35,9 @@ GROUP_VERSION = 5  # 2: checks the result against its input; 3: no Degree / Face
 # Shape; 4: Merge by Distance, Merge Distance and the Warning line; 5: Render Resolution
 # and a render result, the built settings and carried attributes recorded on each result
 # (no "Built ..." inputs), the input passed on while stale
+PART_TAG = "gerbs_part"  # custom property on each nested node group (node_parts.py): its key
+PART_VERSION = "gerbs_part_version"  # ... and the GROUP_VERSION it was built for
+PART_PREFIX = ".GERBS "  # name prefix of the nested node groups
 RESULT_TAG = "gerbs_result"  # custom property on each hidden result object and its mesh
 RESULT_NAME = "GERBS Result"  # prefix of the result object / mesh names
 RENDER_RESULT_NAME = "GERBS Render Result"

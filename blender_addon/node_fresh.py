@@ -17,20 +17,68 @@ group), and the *channel*: while no surface is shown, the input passes on with i
 positions (and its vertex-group weights) copied into hidden attributes, which
 deform-only modifiers below GERBS leave alone, so the add-on can read what GERBS
 received from the final mesh.
+
+The public builders (:func:`fresh`, :func:`shown`, :func:`channel`) add one Group node
+per check, using the nested groups (node_parts.py) they build on first use: one per
+check, and one per layer type and domain for the layer comparison.
 """
 from __future__ import annotations
 
-from . import ids
+from . import ids, node_parts
 
+_GEO, _STR, _BOOL = "NodeSocketGeometry", "NodeSocketString", "NodeSocketBool"
 _CHECK_TYPES = (("FLOAT_VECTOR", "VECTOR"), ("FLOAT_COLOR", "RGBA"), ("INT", "INT"))
 
 
-def settings_fresh(t, result, current: dict, resolution):
-    """Every recorded setting equals the current one (`current`: key -> socket;
-    `resolution`: the socket of the resolution this result is for)."""
+def fresh(t, base, result, names, current: dict, resolution):
+    """Is `result` fresh for the input `base` (the three checks below, each a part)?
+    `names`: the "Attribute Names" socket; `current`: setting key -> socket;
+    `resolution`: the socket of the resolution this result is for."""
+    values = {spec.name: resolution if spec.key == "resolution" else current[spec.key]
+              for spec in ids.RECORD_SETTINGS}
+    return t.boolean(
+        "AND", t.group(_settings_part(), {"Result": result, **values})["Fresh"],
+        t.group(_geometry_part(), {"Base": base, "Result": result})["Fresh"],
+        t.group(_layers_part(), {"Base": base, "Result": result, "Names": names})["Fresh"])
+
+
+def _settings_part():
+    """Inputs: the result and every recorded setting as a float (as the check compares)."""
+    def build(t, gin, gout):
+        current = {s.key: gin[s.name] for s in ids.RECORD_SETTINGS}
+        t.link(settings_fresh(t, gin["Result"], current), gout["Fresh"])
+    inputs = [("Result", _GEO)] + [(s.name, "NodeSocketFloat") for s in ids.RECORD_SETTINGS]
+    return node_parts.ensure("Settings Fresh", inputs, [("Fresh", _BOOL)], build)
+
+
+def _geometry_part():
+    return node_parts.ensure(
+        "Geometry Fresh", [("Base", _GEO), ("Result", _GEO)], [("Fresh", _BOOL)],
+        lambda t, gin, gout: t.link(geometry_fresh(t, gin["Base"], gin["Result"]), gout["Fresh"]))
+
+
+def _layers_part():
+    return node_parts.ensure(
+        "Layers Fresh", [("Base", _GEO), ("Result", _GEO), ("Names", _STR)], [("Fresh", _BOOL)],
+        lambda t, gin, gout: t.link(layers_fresh(t, gin["Base"], gin["Result"], gin["Names"]),
+                                    gout["Fresh"]))
+
+
+def _layer_equal_part(kind, domain):
+    def build(t, gin, gout):
+        t.link(_layer_equal(t, gin["Base"], gin["Result"], gin["Name"], gin["Record"], kind,
+                            domain), gout["Equal"])
+    inputs = [("Base", _GEO), ("Result", _GEO), ("Name", _STR), ("Record", _STR)]
+    return node_parts.ensure(f"Layer Equal {_CHECK_TYPES[kind][0]} {domain}", inputs,
+                             [("Equal", _BOOL)], build)
+
+
+def settings_fresh(t, result, current: dict):
+    """Every recorded setting equals the current one (`current`: key -> socket, the
+    resolution the result is for under "resolution")."""
     checks = []
     for k, spec in enumerate(ids.RECORD_SETTINGS):
-        value = resolution if spec.key == "resolution" else current[spec.key]
+        value = current[spec.key]
         checks.append(t.compare("FLOAT", "EQUAL", value,
                                 t.sample(result, f"{ids.SNAP_SETTINGS}{k}", "FLOAT", "POINT", 0)))
     return t.boolean("AND", *checks)
@@ -107,7 +155,8 @@ def layers_fresh(t, base, result, names):
     i = inner["Layer"]
     name, branch, _ = _layer(t, result, names, i)
     record = t.string_join(ids.SNAP_LAYER, t.number_string(i))
-    checks = [_layer_equal(t, base, result, name, record, kind, domain)
+    inputs = {"Base": base, "Result": result, "Name": name, "Record": record}
+    checks = [t.group(_layer_equal_part(kind, domain), inputs)["Equal"]
               for kind in range(len(_CHECK_TYPES)) for domain in ids.DOMAINS]
     equal = t.index_switch("BOOLEAN", branch, checks)
     t.link(t.boolean("AND", inner["Fresh"], equal), zout.inputs["Fresh"])
@@ -129,6 +178,23 @@ def _group_loop(t, geometry, table, names, target, source):
     return zout.outputs["Geometry"]
 
 
+def shown(t, result, names):
+    """A result as shown (a part): its weights in its vertex groups, its record removed."""
+    return t.group(node_parts.ensure(
+        "Shown", [("Result", _GEO), ("Names", _STR)], [("Geometry", _GEO)],
+        lambda t, gin, gout: t.link(strip_record(t, with_groups(t, gin["Result"], gin["Names"])),
+                                    gout["Geometry"])), {"Result": result, "Names": names})[0]
+
+
+def channel(t, base, table, names):
+    """:func:`channel_tree` as a part."""
+    return t.group(node_parts.ensure(
+        "Channel", [("Base", _GEO), ("Table", _GEO), ("Names", _STR)], [("Geometry", _GEO)],
+        lambda t, gin, gout: t.link(channel_tree(t, gin["Base"], gin["Table"], gin["Names"]),
+                                    gout["Geometry"])),
+        {"Base": base, "Table": table, "Names": names})[0]
+
+
 def with_groups(t, result, names):
     """The result with its carried weights (``ids.OUT_WEIGHT`` + i) in its vertex groups."""
     return _group_loop(
@@ -137,7 +203,7 @@ def with_groups(t, result, names):
                                        "FLOAT")[0])
 
 
-def channel(t, base, table, names):
+def channel_tree(t, base, table, names):
     """The input as passed on while no surface is shown: its positions in
     ``ids.CHANNEL_POSITION`` and, for the vertex-group layers of `table`'s record, their
     weights in ``ids.CHANNEL_WEIGHT`` + i."""

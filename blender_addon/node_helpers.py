@@ -38,6 +38,15 @@ class Tree:
         else:
             self.link(value, sock)
 
+    def group(self, node_group, inputs: dict):
+        """A Group node using `node_group`, its inputs fed from `inputs` (name -> value);
+        returns its outputs."""
+        node = self.node("GeometryNodeGroup")
+        node.node_tree = node_group
+        for name, value in inputs.items():
+            self.feed(node.inputs[name], value)
+        return node.outputs
+
     def compare(self, data_type, operation, a, b):
         """Exact comparison of two values -> BOOLEAN output."""
         node = self.node("FunctionNodeCompare", data_type=data_type, operation=operation)

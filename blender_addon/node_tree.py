@@ -21,6 +21,10 @@ result: a file opened without the add-on, a frame change the add-on missed,
 rebuild the result within the same depsgraph update and the second evaluation
 shows it. Switch nodes are lazy, so the viewport never reads the render result.
 
+The checks and the shown result are nested groups (node_parts.py, built by
+node_fresh.py), one Group node each here: Blender builds a tree in time quadratic
+in its node count, and each check is used twice (viewport and render result).
+
 Every setting is hidden in the modifier's own input list: the add-on's panel
 draws them (only the chosen kernel's parameters), panels.py.
 """
@@ -71,16 +75,12 @@ def _menus(t: Tree, gin, sockets) -> dict:
 
 
 def _fresh(t: Tree, gin, base, result, current, resolution):
-    names = gin.outputs["Attribute Names"]
-    return t.boolean("AND", node_fresh.settings_fresh(t, result, current, resolution),
-                     node_fresh.geometry_fresh(t, base, result),
-                     node_fresh.layers_fresh(t, base, result, names))
+    return node_fresh.fresh(t, base, result, gin.outputs["Attribute Names"], current, resolution)
 
 
 def _shown(t: Tree, gin, result):
     """A result as shown: its weights in its vertex groups, its record removed."""
-    return node_fresh.strip_record(
-        t, node_fresh.with_groups(t, result, gin.outputs["Attribute Names"]))
+    return node_fresh.shown(t, result, gin.outputs["Attribute Names"])
 
 
 def build(group) -> None:

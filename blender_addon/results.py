@@ -3,7 +3,8 @@
 Each GERBS modifier points at two result objects through its hidden "Result"
 and "Render Result" inputs (that pointer is each object's only user, so they are
 saved with the file and freed with the modifier). The result object and its mesh carry
-``ids.RESULT_TAG``; the node group carries ``ids.GROUP_TAG``. Garbage
+``ids.RESULT_TAG``; the node group carries ``ids.GROUP_TAG``, the small groups it
+uses (node_parts.py) ``ids.PART_TAG``. Garbage
 collection removes tagged objects, meshes and groups with no users: a removed
 or applied modifier, a deleted base object, a result object deleted by hand
 (its mesh stays behind with no user).
@@ -19,7 +20,7 @@ import logging
 import bpy
 
 from . import geometry_nodes as gn
-from . import ids
+from . import ids, node_parts
 
 log = logging.getLogger(__name__)
 
@@ -78,6 +79,7 @@ def collect_garbage() -> int:
     for group in [g for g in bpy.data.node_groups if gn.is_gerbs_group(g) and g.users == 0]:
         bpy.data.node_groups.remove(group)
         removed += 1
+    removed += node_parts.collect_unused()  # the parts only the removed groups used
     if removed:
         log.debug("removed %d unused GERBS data-blocks", removed)
     return removed

@@ -17,6 +17,12 @@ def _ours():
             sorted(g.name for g in bpy.data.node_groups if gn.is_gerbs_group(g)))
 
 
+def _parts():
+    from blender_addon import node_parts
+
+    return sorted(g.name for g in bpy.data.node_groups if node_parts.is_part(g))
+
+
 def test_deleting_the_hidden_result_by_hand_leaves_no_orphans(blender):
     from blender_addon import api
     from blender_addon import geometry_nodes as gn
@@ -44,6 +50,8 @@ def test_the_last_modifier_gone_takes_results_meshes_and_group_with_it(blender, 
     assert [len(x) for x in _ours()] == [2, 2, 1]
     api.remove(a)
     assert [len(x) for x in _ours()] == [1, 1, 1]  # the group is still used by b
+    parts = _parts()
+    assert len(parts) > 1 and all(bpy.data.node_groups[p].users > 0 for p in parts)
     bpy.context.view_layer.objects.active = b
     if how == "api":
         api.remove(b)
@@ -56,7 +64,7 @@ def test_the_last_modifier_gone_takes_results_meshes_and_group_with_it(blender, 
     else:
         bpy.data.objects.remove(b)
     bpy.context.view_layer.update()
-    assert _ours() == ([], [], [])
+    assert _ours() == ([], [], []) and _parts() == []  # the group's parts went with it
     assert not [m for m in bpy.data.meshes if m.users == 0 and m.name != "Grid"]
 
 

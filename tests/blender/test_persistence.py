@@ -244,3 +244,41 @@ def test_modifiers_of_an_older_group_version_move_to_the_current_group_on_load(b
     assert [g for g in bpy.data.node_groups if gn.is_gerbs_group(g)] == [mod.node_group]
     P = evaluated(obj)
     assert len(P) > len(obj.data.vertices) and np.abs(P[:42] - positions(obj.data)).max() <= 1e-6
+
+
+def _used_groups(group) -> set:
+    """The node groups `group` uses through Group nodes, at any depth."""
+    out = set()
+    for node in group.nodes:
+        if node.bl_idname == "GeometryNodeGroup" and node.node_tree is not None:
+            out |= {node.node_tree.name} | _used_groups(node.node_tree)
+    return out
+
+
+def test_the_nested_groups_of_an_older_version_are_rebuilt_and_removed_on_load(blender,
+                                                                               tmp_path):
+    """A file whose group and nested parts an older add-on built: on load the modifier
+    uses a current group made of current parts only, and the old ones are gone."""
+    from blender_addon import api, ids, node_parts
+    from blender_addon import geometry_nodes as gn
+
+    obj = make_object("icosphere")
+    mod = api.add_surface(obj, resolution=2)
+    parts = _used_groups(mod.node_group)
+    assert len(parts) > 10 and all(node_parts.is_part(bpy.data.node_groups[p]) for p in parts)
+    mod.node_group[ids.GROUP_TAG] = ids.GROUP_VERSION - 1
+    for name in parts:
+        bpy.data.node_groups[name][ids.PART_VERSION] = ids.GROUP_VERSION - 1
+    name = obj.name
+    path = tmp_path / "old_parts.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    obj = bpy.data.objects[name]
+    mod = obj.modifiers[0]
+    assert gn.is_current_group(mod.node_group)
+    used = _used_groups(mod.node_group)
+    assert len(used) == len(parts)
+    assert all(bpy.data.node_groups[p][ids.PART_VERSION] == ids.GROUP_VERSION for p in used)
+    assert {g.name for g in bpy.data.node_groups if node_parts.is_part(g)} == used
+    P = evaluated(obj)
+    assert len(P) > len(obj.data.vertices) and np.abs(P[:42] - positions(obj.data)).max() <= 1e-6
