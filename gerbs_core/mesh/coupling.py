@@ -29,7 +29,7 @@ from .coupling_local import local_parts, neighbourhood, vertex_graph
 from .fits import pinned_normal_inverse
 from .monomials import monomial_exponents, n_monomials
 
-__all__ = ["CoupledFits", "CopiedFits", "coupled_fits", "identity_fits", "LOCAL_REACH"]
+__all__ = ["CoupledFits", "SelectedFits", "coupled_fits", "identity_fits", "LOCAL_REACH"]
 
 # hops in the data-fit graph (each up to 2 rings) around moved vertices within which a
 # column of the map and all its intermediates lie, with a margin: data fit 1 hop, each
@@ -167,21 +167,27 @@ def _apply(chosen, p, sweeps, d, Y, proj=None):
     return c
 
 
-class CopiedFits:
-    """The fits of a cut mesh (:mod:`gerbs_core.mesh.creases`) as a map of the ORIGINAL
-    positions: ``fits(X) = inner(X[copy_of])`` (V' MMAX, k); :attr:`operator` (V' MMAX, V)
-    sums the columns of a vertex's copies. Same interface as :class:`CoupledFits`."""
+class SelectedFits:
+    """A coefficient map ``inner`` of positions X' = X[source] (V', k) as a map of X (V, k):
+    ``fits(X) = inner(X[source])`` (V' MMAX, k); :attr:`operator` (V' MMAX, V) sums the
+    columns of the rows of X' that select the same vertex. Same interface as
+    :class:`CoupledFits`. Serves the cut mesh of creases (``source`` = copy_of) and the
+    repaired mesh (``source`` = vertex_map)."""
 
-    def __init__(self, inner, cut):
-        self.inner, self._cut = inner, cut
-        self.shape = (inner.shape[0], cut.original.n_vertices)
+    def __init__(self, inner, source, n_source: int):
+        self.inner = inner
+        self.source = np.asarray(source, dtype=np.int64)
+        self.shape = (inner.shape[0], int(n_source))
 
     def __call__(self, X):
-        return self.inner(self._cut.positions(np.asarray(X, dtype=np.float64)))
+        return self.inner(np.asarray(X, dtype=np.float64)[self.source])
 
     @cached_property
     def operator(self) -> sp.csr_matrix:
-        op = (self.inner.operator @ self._cut.copy_matrix).tocsr()
+        n = len(self.source)
+        select = sp.csr_matrix((np.ones(n), (np.arange(n), self.source)),
+                               shape=(n, self.shape[1]))
+        op = (self.inner.operator @ select).tocsr()
         op.sum_duplicates()
         op.eliminate_zeros()
         return op
@@ -190,19 +196,14 @@ class CopiedFits:
     def operator_built(self) -> bool:
         return "operator" in self.__dict__
 
-    @property
-    def nnz_estimate(self) -> int:
-        return int(self.operator.nnz) if self.operator_built else self.inner.nnz_estimate
-
     def columns(self, cols) -> sp.csc_matrix:
-        """Columns ``cols`` (vertices) of :attr:`operator` (csc), from the inner map's columns
-        of their copies (each copy's column added to its vertex's)."""
+        """Columns ``cols`` (vertices of X) of :attr:`operator` (csc), from the inner map's
+        columns of the rows selecting them (each added to its vertex's)."""
         cols = np.asarray(cols, dtype=np.int64).ravel()
         if self.operator_built:
             return self.operator.tocsc()[:, cols]
-        copy_of = self._cut.copy_of
-        mine = np.flatnonzero(np.isin(copy_of, cols))
-        at = np.searchsorted(np.sort(cols), copy_of[mine])
+        mine = np.flatnonzero(np.isin(self.source, cols))
+        at = np.searchsorted(np.sort(cols), self.source[mine])
         sel = sp.csr_matrix((np.ones(len(mine)), (np.arange(len(mine)), np.argsort(cols)[at])),
                             shape=(len(mine), len(cols)))
         return (self.inner.columns(mine) @ sel).tocsc()

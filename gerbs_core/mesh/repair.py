@@ -49,7 +49,6 @@ median edge lengths from the rest: float64 cannot hold both scales).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -134,7 +133,6 @@ class RepairedMesh:
         with the selection of them from the input's: the same map of the input (N, V)."""
         if not self.changed:
             return m
-        import scipy.sparse as sp
         V1, V = len(self.vertex_map), len(self.representative)
         sel = sp.csr_matrix((np.ones(V1), (np.arange(V1), self.vertex_map)), shape=(V1, V))
         return (m @ sel).tocsr()
@@ -142,34 +140,9 @@ class RepairedMesh:
     def fits_of_input(self, fits):
         """The coefficient map ``fits`` (:class:`~gerbs_core.mesh.coupling.CoupledFits`,
         of the repaired vertices) as a map of the input's positions (same interface)."""
-        return fits if not self.changed else _InputFits(fits, self)
-
-
-class _InputFits:
-    """A coefficient map of the repaired vertices composed with their selection from the
-    input's positions: ``fits(X)`` for X (V, k), ``operator`` (V' M, V) made on first use."""
-
-    def __init__(self, fits, repair):
-        self._fits, self._repair = fits, repair
-
-    def __call__(self, X):
-        return self._fits(self._repair.positions(X))
-
-    @cached_property
-    def operator(self):
-        return self._repair.to_input(self._fits.operator)
-
-    def columns(self, cols):
-        """Columns ``cols`` (input vertices) of :attr:`operator` (csc)."""
-        cols = np.asarray(cols, dtype=np.int64).ravel()
-        rep = self._repair
-        mine = np.flatnonzero(np.isin(rep.vertex_map, cols))   # repaired copies of cols
-        own = self._fits.columns(mine)
-        # each repaired copy k of input vertex j adds its column to j's
-        at = np.searchsorted(np.sort(cols), rep.vertex_map[mine])
-        sel = sp.csr_matrix((np.ones(len(mine)), (np.arange(len(mine)), np.argsort(cols)[at])),
-                            shape=(len(mine), len(cols)))
-        return (own @ sel).tocsc()
+        from .coupling import SelectedFits
+        return fits if not self.changed else SelectedFits(fits, self.vertex_map,
+                                                          len(self.representative))
 
 
 def _warning(tag, indices, element, detail=None):

@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import InvalidParameterError, ResourceLimitError
 from .agreement import MMAX, FairnessRule, fair_fits
 from .charts import BOUNDARY_RULES, vertex_charts
-from .coupling import CopiedFits
+from .coupling import SelectedFits
 from .cover import require_cover, star_cover
 from .crease_surface import build_model, crease_input, first_occurrence, merge_tessellation
 from .evaluate import evaluate, partition_at
@@ -423,6 +423,6 @@ class BlendingSurface:
             rows = first_occurrence(cut.sample_map(mlat), lat.n_points)
             # merged crease samples: one row each; the columns of a vertex's copies summed
             base, mono = base[rows] @ cut.copy_matrix, mono[rows]
-            fits = CopiedFits(self.model.fits, cut)
+            fits = SelectedFits(self.model.fits, cut.copy_of, cut.original.n_vertices)
         self._require_cover(eps)
         return Stencil(self.repair.to_input(base), mono, self.repair.fits_of_input(fits), lat)
