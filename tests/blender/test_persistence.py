@@ -232,18 +232,22 @@ def test_modifiers_of_an_older_group_version_move_to_the_current_group_on_load(b
     mod.node_group = old
     for key, value in (("resolution", 3), ("kernel", "logistic"), ("bfbs_left", 1)):
         gn.write_settings(mod, **{key: value})
-    name = obj.name
-    path = tmp_path / "old.blend"
-    bpy.ops.wm.save_as_mainfile(filepath=str(path))
-    bpy.ops.wm.open_mainfile(filepath=str(path))
-    obj = bpy.data.objects[name]
-    mod = obj.modifiers[0]
+    obj, mod = _save_and_reopen(obj, tmp_path / "old.blend")
     assert gn.is_current_group(mod.node_group)
     got = api.get_settings(obj)
     assert (got["resolution"], got["kernel"], got["bfbs_left"]) == (3, "logistic", 1)
     assert [g for g in bpy.data.node_groups if gn.is_gerbs_group(g)] == [mod.node_group]
     P = evaluated(obj)
     assert len(P) > len(obj.data.vertices) and np.abs(P[:42] - positions(obj.data)).max() <= 1e-6
+
+
+def _save_and_reopen(obj, path):
+    """Save the file to `path`, open it again; the object by name and its first modifier."""
+    name = obj.name
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    obj = bpy.data.objects[name]
+    return obj, obj.modifiers[0]
 
 
 def _used_groups(group) -> set:
@@ -269,12 +273,7 @@ def test_the_nested_groups_of_an_older_version_are_rebuilt_and_removed_on_load(b
     mod.node_group[ids.GROUP_TAG] = ids.GROUP_VERSION - 1
     for name in parts:
         bpy.data.node_groups[name][ids.PART_VERSION] = ids.GROUP_VERSION - 1
-    name = obj.name
-    path = tmp_path / "old_parts.blend"
-    bpy.ops.wm.save_as_mainfile(filepath=str(path))
-    bpy.ops.wm.open_mainfile(filepath=str(path))
-    obj = bpy.data.objects[name]
-    mod = obj.modifiers[0]
+    obj, mod = _save_and_reopen(obj, tmp_path / "old_parts.blend")
     assert gn.is_current_group(mod.node_group)
     used = _used_groups(mod.node_group)
     assert len(used) == len(parts)
