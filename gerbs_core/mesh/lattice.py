@@ -36,6 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
+from .arrays import read_only as _ro
 from .lattice_faces import output_edges, polygon_table
 from .lattice_templates import CORNER, EDGE, INTERIOR, face_counts, template
 from .polygon_map import corner_weights, map_to_polygon
@@ -72,12 +73,6 @@ def _scatter_rows(dst: np.ndarray, rows: np.ndarray, src: np.ndarray) -> None:
     (numpy's row-wise fancy assignment is ~2x slower for short rows)."""
     item = np.dtype((np.void, dst.itemsize * dst.shape[1]))
     dst.view(item).ravel()[rows] = np.ascontiguousarray(src, dtype=dst.dtype).view(item).ravel()
-
-
-def _ro(a):
-    a = np.ascontiguousarray(a)
-    a.flags.writeable = False
-    return a
 
 
 class SizeClass(NamedTuple):

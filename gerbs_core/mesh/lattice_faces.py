@@ -10,15 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .arrays import read_only as _ro
 from .lattice_templates import face_counts, template_edges, template_faces
 
 __all__ = ["corner_counts", "polygon_table", "output_edges"]
-
-
-def _ro(a):
-    a = np.ascontiguousarray(a)
-    a.flags.writeable = False
-    return a
 
 
 def _offsets(counts) -> np.ndarray:

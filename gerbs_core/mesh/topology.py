@@ -53,15 +53,10 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidMeshError
+from .arrays import read_only as _ro
 from .topology_build import check_faces, check_indices, face_cycles, mesh_edges, vertex_stars
 
 __all__ = ["MeshTopology"]
-
-
-def _ro(a) -> np.ndarray:
-    a = np.ascontiguousarray(a)
-    a.flags.writeable = False
-    return a
 
 
 def _parse_faces(faces, n_vertices):
