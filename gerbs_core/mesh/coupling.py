@@ -28,6 +28,7 @@ import scipy.sparse as sp
 from .coupling_local import local_parts, neighbourhood, vertex_graph
 from .fits import pinned_normal_inverse
 from .monomials import monomial_exponents, n_monomials
+from .selection import selection_matrix
 
 __all__ = ["CoupledFits", "SelectedFits", "coupled_fits", "identity_fits", "LOCAL_REACH"]
 
@@ -184,10 +185,7 @@ class SelectedFits:
 
     @cached_property
     def operator(self) -> sp.csr_matrix:
-        n = len(self.source)
-        select = sp.csr_matrix((np.ones(n), (np.arange(n), self.source)),
-                               shape=(n, self.shape[1]))
-        op = (self.inner.operator @ select).tocsr()
+        op = (self.inner.operator @ selection_matrix(self.source, self.shape[1])).tocsr()
         op.sum_duplicates()
         op.eliminate_zeros()
         return op

@@ -42,26 +42,24 @@ class FaceLayouts:
     lengths: np.ndarray
 
 
-def cyclic_polygon(lengths: np.ndarray) -> np.ndarray:
-    """Cyclic convex polygons with given edge lengths, vectorized over polygons.
+def _cyclic_triangle(lengths: np.ndarray) -> np.ndarray:
+    """Triangles (F, 3, 2) with edge lengths (F, 3) by the law of cosines (exact)."""
+    l0, l1, l2 = lengths[:, 0], lengths[:, 1], lengths[:, 2]
+    x = (l0 * l0 + l2 * l2 - l1 * l1) / (2.0 * l0)
+    y = np.sqrt(np.maximum(l2 * l2 - x * x, 0.0))
+    out = np.zeros((len(lengths), 3, 2))
+    out[:, 1, 0] = l0
+    out[:, 2, 0] = x
+    out[:, 2, 1] = y
+    return out
 
-    lengths (F, n), n >= 3, edge i from corner i to corner i+1. Returns corners
-    (F, n, 2) in the face frame (corner 0 at the origin, edge 0 along +x, ccw).
-    Exact for triangles; n-gons to ~1e-15 relative. Raises ValueError (via the
-    caller) when some edge is not shorter than the sum of the others (index list
-    returned by :func:`_degenerate`).
-    """
-    lengths = np.asarray(lengths, dtype=np.float64)
+
+def _circumradius(lengths: np.ndarray):
+    """(R (F,), imax (F,), centred (F,)): the circumradius of the cyclic polygons with
+    edge lengths (F, n), their longest edge, and whether the centre lies inside.
+
+    Bisection on t = L / (2R) to full double precision (at most 64 halvings)."""
     F, n = lengths.shape
-    if n == 3:
-        l0, l1, l2 = lengths[:, 0], lengths[:, 1], lengths[:, 2]
-        x = (l0 * l0 + l2 * l2 - l1 * l1) / (2.0 * l0)
-        y = np.sqrt(np.maximum(l2 * l2 - x * x, 0.0))
-        out = np.zeros((F, 3, 2))
-        out[:, 1, 0] = l0
-        out[:, 2, 0] = x
-        out[:, 2, 1] = y
-        return out
     imax = np.argmax(lengths, axis=1)
     L = lengths[np.arange(F), imax]
     rel = lengths / L[:, None]  # in (0, 1]
@@ -86,15 +84,12 @@ def cyclic_polygon(lengths: np.ndarray) -> np.ndarray:
         hi = np.where(go_left, t, hi)
         lo = np.where(go_left, lo, t)
     t = 0.5 * (lo + hi)
-    R = L / (2.0 * t)
-    half = np.arcsin(np.clip(lengths / (2.0 * R[:, None]), -1.0, 1.0))
-    arcs = 2.0 * half
-    # the longest edge goes back along the short arc when the centre is outside
-    arcs[np.arange(F), imax] = np.where(centred, arcs[np.arange(F), imax],
-                                        -arcs[np.arange(F), imax])
-    ang = np.concatenate([np.zeros((F, 1)), np.cumsum(arcs[:, :-1], axis=1)], axis=1)
-    pts = R[:, None, None] * np.stack([np.cos(ang), np.sin(ang)], axis=-1)
-    # move to the face frame: corner 0 at the origin, edge 0 along +x
+    return L / (2.0 * t), imax, centred
+
+
+def _to_face_frame(pts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """Polygons (F, n, 2) moved to the face frame: corner 0 at the origin, edge 0 along
+    +x (its end set exactly to (length, 0))."""
     pts = pts - pts[:, :1, :]
     e0 = pts[:, 1, :]
     c, s = e0[:, 0] / lengths[:, 0], e0[:, 1] / lengths[:, 0]
@@ -105,6 +100,29 @@ def cyclic_polygon(lengths: np.ndarray) -> np.ndarray:
     out[:, 1, :] = [0.0, 0.0]
     out[:, 1, 0] = lengths[:, 0]
     return out
+
+
+def cyclic_polygon(lengths: np.ndarray) -> np.ndarray:
+    """Cyclic convex polygons with given edge lengths, vectorized over polygons.
+
+    lengths (F, n), n >= 3, edge i from corner i to corner i+1; every edge shorter than
+    the sum of the others (:func:`face_layouts` checks). Returns corners (F, n, 2) in
+    the face frame (corner 0 at the origin, edge 0 along +x, ccw). Exact for
+    triangles; n-gons to ~1e-15 relative.
+    """
+    lengths = np.asarray(lengths, dtype=np.float64)
+    F, n = lengths.shape
+    if n == 3:
+        return _cyclic_triangle(lengths)
+    R, imax, centred = _circumradius(lengths)
+    half = np.arcsin(np.clip(lengths / (2.0 * R[:, None]), -1.0, 1.0))
+    arcs = 2.0 * half
+    # the longest edge goes back along the short arc when the centre is outside
+    arcs[np.arange(F), imax] = np.where(centred, arcs[np.arange(F), imax],
+                                        -arcs[np.arange(F), imax])
+    ang = np.concatenate([np.zeros((F, 1)), np.cumsum(arcs[:, :-1], axis=1)], axis=1)
+    pts = R[:, None, None] * np.stack([np.cos(ang), np.sin(ang)], axis=-1)
+    return _to_face_frame(pts, lengths)
 
 
 def _corner_angles(corners: np.ndarray) -> np.ndarray:

@@ -51,11 +51,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import InvalidMeshError, _short
 from . import repair_faces as rf
 from . import repair_sheets as rs
+from .selection import selection_matrix
 from .topology import MeshTopology, _parse_faces
 from .validation import check_finite, corner_successors, validate_geometry
 
@@ -133,9 +133,7 @@ class RepairedMesh:
         with the selection of them from the input's: the same map of the input (N, V)."""
         if not self.changed:
             return m
-        V1, V = len(self.vertex_map), len(self.representative)
-        sel = sp.csr_matrix((np.ones(V1), (np.arange(V1), self.vertex_map)), shape=(V1, V))
-        return (m @ sel).tocsr()
+        return (m @ selection_matrix(self.vertex_map, len(self.representative))).tocsr()
 
     def fits_of_input(self, fits):
         """The coefficient map ``fits`` (:class:`~gerbs_core.mesh.coupling.CoupledFits`,

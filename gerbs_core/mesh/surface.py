@@ -24,45 +24,23 @@ import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
 from .agreement import MMAX, FairnessRule, fair_fits
-from .charts import BOUNDARY_RULES, vertex_charts
+from .charts import vertex_charts
 from .coupling import SelectedFits
 from .cover import require_cover, star_cover
 from .crease_surface import build_model, crease_input, first_occurrence, merge_tessellation
 from .evaluate import evaluate, partition_at
-from .lattice import Lattice
+from .lattice import Lattice, output_counts
 from .layout import face_layouts
 from .memory import memory_estimate
 from .monomials import monomials
 from .repair import repair_mesh
 from .rings import data_rings
 from .stencil import Stencil
+from .surface_inputs import (check_settings, face_points, kernel_setting, points, positive,
+                             unit_normals)
 from .topology import MeshTopology
 
 __all__ = ["BlendingSurface", "SurfaceModel"]
-
-
-def _points(name, a, V=None):
-    try:
-        x = np.array(a, dtype=np.float64, copy=True)  # never alias the caller's array
-    except (TypeError, ValueError):
-        raise InvalidParameterError(name, f"must be a real (V, 3) array, got {type(a).__name__}") \
-            from None
-    if x.ndim != 2 or x.shape[1] != 3 or (V is not None and len(x) != V):
-        raise InvalidParameterError(name, f"must be a ({'V' if V is None else V}, 3) array, "
-                                    f"got shape {x.shape}")
-    return x
-
-
-def _positive(name, value, integer=False, lo=0.0, closed=False):
-    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-    if ok:
-        v = float(value)
-        ok = np.isfinite(v) and (v >= lo if closed else v > lo) and (not integer or v == int(v))
-    if not ok:
-        kind = "an integer" if integer else "a finite number"
-        raise InvalidParameterError(name, f"must be {kind} {'>=' if closed else '>'} {lo:g}, "
-                                    f"got {value!r}")
-    return int(value) if integer else float(value)
 
 
 @dataclass(frozen=True)
@@ -151,34 +129,19 @@ class BlendingSurface:
                  shrink: float = 0.95, exact_gauge: bool = False, memory_budget: float = 2.0e9,
                  eps0_resolution: int = 6, merge_distance: float | None = None,
                  creases=None, corners=None):
-        X = _points("vertices", vertices)
-        rest = None if rest_positions is None else _points("rest_positions", rest_positions, len(X))
+        X = points("vertices", vertices)
+        rest = None if rest_positions is None else points("rest_positions", rest_positions, len(X))
         self.repair = repair_mesh(X, faces, merge_distance=merge_distance, rest_positions=rest)
         X, topo = np.array(self.repair.vertices), self.repair.topology
         rest = X if rest is None else np.array(self.repair.rest)
-        if kernel is None:
-            from ..kernels import ERBS
-            kernel = ERBS()
-        from ..kernels import Kernel
-        if not isinstance(kernel, Kernel):
-            raise InvalidParameterError("kernel", f"must be a gerbs_core.kernels.Kernel, got "
-                                        f"{type(kernel).__name__}")
-        if boundary not in BOUNDARY_RULES:
-            raise InvalidParameterError("boundary", f"must be one of {BOUNDARY_RULES}, got "
-                                        f"{boundary!r}")
-        if not (isinstance(shrink, (int, float)) and 0.0 < shrink <= 1.0):
-            raise InvalidParameterError("shrink", f"must be in (0, 1], got {shrink!r}")
-        if not (isinstance(kappa, (int, float)) and 0.0 < kappa < 1.0):
-            raise InvalidParameterError("kappa", f"must be in (0, 1), got {kappa!r}")
-        fairness = FairnessRule() if fairness is None else fairness
-        if not isinstance(fairness, FairnessRule):
-            raise InvalidParameterError("fairness", "must be a FairnessRule")
-        self.memory_budget = _positive("memory_budget", memory_budget)
-        self.eps0_resolution = _positive("eps0_resolution", eps0_resolution, integer=True, lo=1,
-                                         closed=True)
+        kernel = kernel_setting(kernel)
+        fairness = check_settings(boundary, kappa, shrink, fairness)
+        self.memory_budget = positive("memory_budget", memory_budget)
+        self.eps0_resolution = positive("eps0_resolution", eps0_resolution, integer=True, lo=1,
+                                        closed=True)
         self.kernel = kernel
         self._normals = None if normals is None else \
-            self._unit_normals(normals, len(self.repair.representative))[self.repair.vertex_map]
+            unit_normals(normals, len(self.repair.representative))[self.repair.vertex_map]
         cut = crease_input(self.repair, faces, creases, corners)
         if cut is None:
             layouts = face_layouts(topo, rest)
@@ -197,14 +160,6 @@ class BlendingSurface:
         self._coef = self._coefficients(X)
 
     # ------------------------------------------------------------------ data
-    @staticmethod
-    def _unit_normals(normals, V):
-        nrm = _points("normals", normals, V)
-        ln = np.linalg.norm(nrm, axis=1)
-        if not np.all(np.isfinite(ln)) or np.any(ln == 0):
-            raise InvalidParameterError("normals", "must be finite and non-zero")
-        return nrm / ln[:, None]
-
     @property
     def _Xm(self):
         """Positions of the model's vertices (the copies of the cut mesh with creases)."""
@@ -275,7 +230,7 @@ class BlendingSurface:
         """The surface of new input positions (V, 3) with the same binding (model shared)."""
         new = object.__new__(BlendingSurface)
         new.__dict__.update({k: v for k, v in self.__dict__.items() if k != "eps0"})
-        new._X = self.repair.positions(_points("vertices", vertices,
+        new._X = self.repair.positions(points("vertices", vertices,
                                                len(self.repair.representative)))
         new._X.flags.writeable = False
         new._coef = new._coefficients(new._X)
@@ -287,7 +242,6 @@ class BlendingSurface:
         """min over a check lattice (every lattice point of every face, resolution
         ``eps0_resolution``) of max_v psi_v: the thickness of the cover (Definition 11);
         > 0 means no point is left uncovered."""
-        from .lattice import Lattice
         lat = Lattice(self.model.topology, self.eps0_resolution)
         x = lat.map_to_polygon(self.layouts.corners, local=True)
         return self._evaluate(lat.local_face, x, 0)[1]
@@ -299,30 +253,12 @@ class BlendingSurface:
         return evaluate(self.model, self._Xm, self._coef, f, x, nu)
 
     # ---------------------------------------------------------------- public
-    def _face_points(self, face_index, local_coords):
-        x = np.asarray(local_coords, dtype=np.float64)
-        if x.shape[-1:] != (2,):
-            raise InvalidParameterError("local_coords", f"must have shape (..., 2), got {x.shape}")
-        if not np.all(np.isfinite(x)):
-            raise InvalidParameterError("local_coords", "must be finite")
-        try:
-            f = np.broadcast_to(np.asarray(face_index), x.shape[:-1])
-        except ValueError:
-            raise InvalidParameterError("face_index", f"does not broadcast against "
-                                        f"local_coords {x.shape}") from None
-        if f.dtype.kind not in "iu":
-            raise InvalidParameterError("face_index", "must be integers")
-        f = f.astype(np.int64).ravel()
-        if np.any((f < 0) | (f >= self.topology.n_faces)):
-            raise InvalidParameterError("face_index", "out of range")
-        return f, x.reshape(-1, 2), x.shape[:-1]
-
     def evaluate_all(self, face_index, local_coords, nu: int = 0):
         """[S (..., 3), dS (..., 3, 2), d2S (..., 3, 2, 2)] up to nu at points of faces, in
         face layout coordinates (:mod:`gerbs_core.mesh.layout`); exact to round-off."""
         if nu not in (0, 1, 2):
             raise InvalidParameterError("nu", f"must be 0, 1 or 2, got {nu!r}")
-        f, x, shape = self._face_points(face_index, local_coords)
+        f, x, shape = face_points(face_index, local_coords, self.topology.n_faces)
         out, eps = self._evaluate(f, x, nu)
         self._require_cover(eps)
         return [o.reshape(shape + o.shape[1:]) for o in out]
@@ -335,7 +271,7 @@ class BlendingSurface:
         """The partition of unity (eq. (73)) at face points: (vertices (N, n), Psi (N, n),
         psi (N, n)) with n the largest face size (padding: vertex -1, values 0); with
         nu = 1 also dPsi (N, n, 2)."""
-        f, x, _ = self._face_points(face_index, local_coords)
+        f, x, _ = face_points(face_index, local_coords, self.topology.n_faces)
         return partition_at(self.model, f, x, nu)
 
     def local_function(self, v: int, y, nu: int = 0):
@@ -367,7 +303,6 @@ class BlendingSurface:
 
     def lattice(self, resolution: int):
         """The sample lattice at `resolution` (checked against the memory budget)."""
-        from .lattice import Lattice, output_counts
         P, _ = output_counts(self.topology, resolution)
         est = self.memory_estimate(resolution)
         if est > self.memory_budget:

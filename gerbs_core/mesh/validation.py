@@ -16,7 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidMeshError
-from .topology import MeshTopology, edge_error
+from .topology import MeshTopology
+from .topology_build import edge_error
 
 __all__ = ["validate_geometry", "flat_faces", "corner_successors", "check_finite", "OUTLIER_FACTOR"]
 

@@ -1,0 +1,82 @@
+"""The map of lattice samples into their faces' polygons (:meth:`Lattice.map_to_polygon`,
+:meth:`Lattice.corner_weights` of :mod:`gerbs_core.mesh.lattice`).
+
+Triangles barycentric, quads bilinear, n-gons barycentric in the fan triangle (centre,
+corner k, corner k+1): exact affine/bilinear formulas, evaluated vectorized.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InvalidParameterError
+
+__all__ = ["corner_weights", "map_to_polygon"]
+
+
+def _params(lat, local: bool):
+    """(face, fan, uv) of the samples, or of the local table with `local`."""
+    if local:
+        return lat.local_face, lat.local_fan, lat.local_uv
+    return lat.face, lat.fan, lat.uv
+
+
+def corner_weights(lat, local: bool = False) -> np.ndarray:
+    """(P, n_max) weights of each sample's face corners (:meth:`Lattice.corner_weights`)."""
+    tp = lat.topology
+    face, fan, uv = _params(lat, local)
+    n = tp.face_sizes[face]
+    a, b = uv[:, 0], uv[:, 1]
+    w = np.zeros((len(face), int(tp.face_sizes.max())))
+    s = n == 3
+    if s.any():
+        w[s, 0], w[s, 1], w[s, 2] = 1 - a[s] - b[s], a[s], b[s]
+    s = n == 4
+    if s.any():
+        w[s, 0], w[s, 1] = (1 - a[s]) * (1 - b[s]), a[s] * (1 - b[s])
+        w[s, 2], w[s, 3] = a[s] * b[s], (1 - a[s]) * b[s]
+    s = np.flatnonzero(n >= 5)
+    if len(s):
+        w[s] = ((1 - a[s] - b[s]) / n[s])[:, None] * (np.arange(w.shape[1]) < n[s][:, None])
+        w[s, fan[s]] += a[s]
+        w[s, (fan[s] + 1) % n[s]] += b[s]
+    return w
+
+
+def _fan_centres(tp, X, centers):
+    """(F, d) fan centres: the corners' mean, or the given ones (checked)."""
+    if centers is None:
+        return np.add.reduceat(X, tp.face_offsets[:-1], axis=0) / tp.face_sizes[:, None]
+    ctr = np.asarray(centers, dtype=np.float64)
+    if ctr.shape != (tp.n_faces, X.shape[1]):
+        raise InvalidParameterError("centers", f"must have shape ({tp.n_faces}, "
+                                    f"{X.shape[1]}), got {ctr.shape}")
+    return ctr
+
+
+def map_to_polygon(lat, corners2d, centers=None, local: bool = False) -> np.ndarray:
+    """(P, d) (or (L, d)) samples mapped into the polygons of the corner coordinates
+    ``corners2d`` (C, d) (:meth:`Lattice.map_to_polygon`)."""
+    tp = lat.topology
+    X = np.asarray(corners2d, dtype=np.float64)
+    if X.ndim != 2 or X.shape[0] != tp.n_corners:
+        raise InvalidParameterError("corners2d", f"must have shape ({tp.n_corners}, d), got "
+                                    f"{X.shape}")
+    face, fan, uv = _params(lat, local)
+    fo, n = tp.face_offsets[face], tp.face_sizes[face]
+    a, b = uv[:, :1], uv[:, 1:]
+    out = np.empty((len(face), X.shape[1]))
+    s = n == 3
+    c = fo[s]
+    out[s] = (1 - a[s] - b[s]) * X[c] + a[s] * X[c + 1] + b[s] * X[c + 2]
+    s = n == 4
+    c = fo[s]
+    out[s] = ((1 - a[s]) * (1 - b[s]) * X[c] + a[s] * (1 - b[s]) * X[c + 1]
+              + a[s] * b[s] * X[c + 2] + (1 - a[s]) * b[s] * X[c + 3])
+    s = n >= 5
+    if s.any():
+        ctr = _fan_centres(tp, X, centers)
+        k = fan[s]
+        c0 = fo[s] + k
+        c1 = fo[s] + (k + 1) % n[s]
+        out[s] = (1 - a[s] - b[s]) * ctr[face[s]] + a[s] * X[c0] + b[s] * X[c1]
+    return out
