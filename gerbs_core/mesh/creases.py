@@ -38,6 +38,7 @@ import scipy.sparse as sp
 
 from ..errors import InvalidParameterError
 from .topology import MeshTopology
+from .selection import selection_matrix
 
 __all__ = ["CreaseCut", "crease_cut", "crease_weights", "vertex_weights", "FULL",
            "SMOOTH", "CHAIN", "CORNER", "DART"]
@@ -236,9 +237,7 @@ class CreaseCut:
     @cached_property
     def copy_matrix(self) -> sp.csr_matrix:
         """(V', V) 0/1: copy i is vertex copy_of[i] (X' = copy_matrix @ X)."""
-        n = len(self.copy_of)
-        return sp.csr_matrix((np.ones(n), (np.arange(n), self.copy_of)),
-                             shape=(n, self.original.n_vertices))
+        return selection_matrix(self.copy_of, self.original.n_vertices)
 
     def sharpness(self, base: np.ndarray) -> np.ndarray:
         """Face sharpness (F,) for the tension energy: base + TENSION_GAIN * w, w the largest

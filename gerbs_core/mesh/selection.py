@@ -3,7 +3,8 @@
 Composing a map of selected positions with S makes it a map of all positions; S has
 a single 1 per row, so products with it only move (and, for repeated sources, add)
 columns. Serves the repaired mesh's vertices (:mod:`.repair`) and the coefficient
-maps of selected positions (:class:`~gerbs_core.mesh.coupling.SelectedFits`).
+maps of selected positions (:class:`~gerbs_core.mesh.coupling.SelectedFits`) and the
+crease cut's copies (:class:`~gerbs_core.mesh.creases.CreaseCut`).
 """
 from __future__ import annotations
 
