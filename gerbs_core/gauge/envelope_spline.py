@@ -24,11 +24,12 @@ def line_jet(a, m, b, theta, nu: int):
     """u = a cos(theta - m) + b and its theta-derivatives: array (nu + 1, *shape), the
     arguments broadcast together (b may be None for lines through no circle term)."""
     p = np.asarray(theta, dtype=np.float64) - m
-    c, s = np.cos(p), np.sin(p)
-    cycle = (c, -s, -c, s)
     out = np.empty((nu + 1,) + np.broadcast(p, a).shape)
-    for i in range(nu + 1):
-        out[i] = a * cycle[i % 4]
+    out[0] = a * np.cos(p)
+    if nu >= 1:
+        s = a * np.sin(p)          # the cycle a cos, -a sin, -a cos, a sin
+        for i in range(1, nu + 1):
+            out[i] = -s if i % 4 == 1 else (-out[0] if i % 4 == 2 else s)
     if b is not None:
         out[0] += b
     return out
