@@ -20,6 +20,9 @@ i.e. on the knot interval [t_j, t_{j+1}] (w = (theta - t_j) / (t_{j+1} - t_j))
 
     u~ = (1 - F(w)) u_j + F(w) u_{j+1}.                                   (*)
 
+(evaluated by :mod:`gerbs_core.gauge.envelope_spline` through the package's one GERBS
+spline evaluator).
+
 A local function is a straight line (b = 0, a = 1/q: its gauge |y| u_j is
 LINEAR in y) or a constant radius (a = 0). Three certified constructions
 (:mod:`gerbs_core.gauge.blend`, :mod:`gerbs_core.gauge.fallbacks`); the first that exists
