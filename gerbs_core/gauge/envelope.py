@@ -20,6 +20,9 @@ i.e. on the knot interval [t_j, t_{j+1}] (w = (theta - t_j) / (t_{j+1} - t_j))
 
     u~ = (1 - F(w)) u_j + F(w) u_{j+1}.                                   (*)
 
+(evaluated by :mod:`gerbs_core.gauge.envelope_spline` through the package's one GERBS
+spline evaluator).
+
 A local function is a straight line (b = 0, a = 1/q: its gauge |y| u_j is
 LINEAR in y) or a constant radius (a = 0). Three certified constructions
 (:mod:`gerbs_core.gauge.blend`, :mod:`gerbs_core.gauge.fallbacks`); the first that exists
@@ -56,13 +59,15 @@ import math
 import numpy as np
 
 from .blend import build_blend
+from .envelope_spline import envelope_u, pieces_u, reciprocal_derivs
 from .fallbacks import build_constant, build_fillet, interval_ratios
 from ..errors import InvalidParameterError, InvalidPointSetError
 
 __all__ = ["RadialEnvelope"]
 
+_eval_pieces = pieces_u      # the name EnvelopeTable imports
+
 TWO_PI = 2.0 * math.pi
-_HALF_PI = 0.5 * math.pi
 
 
 def _check_unit_interval(name, value, closed_right):
@@ -188,57 +193,7 @@ class RadialEnvelope:
         neighbour to the other (K >= 2 points). Raises InvalidPointSetError
         naming ring indices when the ring is not star-shaped w.r.t. the origin.
         """
-        ring = np.array(ring, dtype=np.float64)
-        if ring.ndim != 2 or ring.shape[1] != 2:
-            raise InvalidParameterError("ring", f"expected shape (K, 2), got {ring.shape}")
-        nonfinite = np.flatnonzero(~np.isfinite(ring).all(axis=1))
-        if nonfinite.size:
-            raise InvalidPointSetError("ring has non-finite coordinates at indices", nonfinite)
-        if closed and len(ring) >= 2 and np.array_equal(ring[0], ring[-1]):
-            ring = ring[:-1]
-        need = 3 if closed else 2
-        if len(ring) < need:
-            raise InvalidPointSetError(
-                f"a {'closed' if closed else 'open'} star needs at least {need} ring "
-                f"vertices, got {len(ring)}")
-        r = np.hypot(ring[:, 0], ring[:, 1])
-        at0 = np.flatnonzero(r <= 0.0)
-        if at0.size:
-            raise InvalidPointSetError("ring vertices coincide with the centre at indices", at0)
-        nxt = np.roll(ring, -1, axis=0) if closed else ring[1:]
-        cur = ring if closed else ring[:-1]
-        cross = cur[:, 0] * nxt[:, 1] - cur[:, 1] * nxt[:, 0]
-        dot = (cur * nxt).sum(axis=1)
-        k = np.arange(len(cur))
-        j = (k + 1) % len(ring)
-        scale = np.hypot(cur[:, 0], cur[:, 1]) * np.hypot(nxt[:, 0], nxt[:, 1])
-        on_edge = (np.abs(cross) <= 1e-12 * scale) & (dot < 0)
-        if on_edge.any():
-            e = np.flatnonzero(on_edge)
-            raise InvalidPointSetError(
-                "the centre lies on a boundary edge; ring indices",
-                np.unique(np.concatenate([k[e], j[e]])))
-        nonpos = cross <= 1e-12 * scale
-        if nonpos.any():
-            e = np.flatnonzero(nonpos)
-            raise InvalidPointSetError(
-                "ring is not star-shaped w.r.t. the centre (edges seen at a non-positive "
-                "angle, i.e. not counter-clockwise); ring indices",
-                np.unique(np.concatenate([k[e], j[e]])))
-        dth = np.arctan2(cross, dot)
-        total = dth.sum()
-        if closed and abs(total - TWO_PI) > 1e-9:
-            first = int(np.searchsorted(np.cumsum(dth), TWO_PI + 1e-9))
-            raise InvalidPointSetError(
-                f"ring winds {total / TWO_PI:.3g} times around the centre (not star-shaped); "
-                "it overlaps itself from ring index", [min(first, len(ring) - 1)])
-        if not closed and total >= TWO_PI:
-            raise InvalidPointSetError("open ring spans >= 2*pi around the centre")
-        th0 = math.atan2(ring[0, 1], ring[0, 0])
-        theta = th0 + np.concatenate([[0.0], np.cumsum(dth)])
-        if closed:
-            theta[-1] = th0 + TWO_PI
-            r = np.append(r, r[0])
+        theta, r = _ring_polar(ring, closed)
         return cls(theta, r, closed=closed, **kwargs)
 
     def _finish_smooth(self, bl):
@@ -269,12 +224,14 @@ class RadialEnvelope:
                 continue      # not certified: never used
             w = (np.arange(16) + 0.5) / 16
             x = (kn[:-1, None] + np.diff(kn)[:, None] * w).ravel()
-            u = _eval_u(x, kn, m, a, b, self.kernel, 2, False)
+            u = envelope_u(x, kn, m, a, b, self.kernel, 2, False)
             score = float(np.max(np.abs(u[0] + u[2]) / u[0]))
             if best is None or score < best[0]:
                 best = (score, name, kn, m, a, b, float(ratio.min()))
         if best is None:
-            raise AssertionError("no certified smooth envelope (kappa * rho <= rho~ <= rho)")
+            # "constant" is certified by proof; only rounding on a degenerate star fails it
+            raise InvalidPointSetError(
+                "no certified smooth envelope (kappa * rho <= rho~ <= rho) for this star")
         _, self.method, self.knots, self.line_m, a, b, worst = best
         self.line_a = a / self.shrink
         self.line_b = b / self.shrink
@@ -314,14 +271,14 @@ class RadialEnvelope:
         those of the end lines (callers mask them out).
         """
         x = self._reduce(theta)
-        return _eval_u(x, self.knots, self.line_m, self.line_a, self.line_b, self.kernel,
-                       nmax, self.exact)
+        return envelope_u(x, self.knots, self.line_m, self.line_a, self.line_b, self.kernel,
+                          nmax, self.exact)
 
     def derivs(self, theta, nmax=2):
         """rho~ and its theta-derivatives (order <= 3): array (nmax+1, *theta.shape)."""
         if not 0 <= int(nmax) <= 3:
             raise InvalidParameterError("nmax", f"must be 0..3, got {nmax!r}")
-        return _reciprocal_derivs(self.u_derivs(theta, nmax))
+        return reciprocal_derivs(self.u_derivs(theta, nmax))
 
     def __call__(self, theta, nu=0):
         """rho~^(nu)(theta), nu = 0..3 (scipy style)."""
@@ -348,7 +305,7 @@ class RadialEnvelope:
         x = (t[:-1, None] + np.diff(t)[:, None] * w[None, :]).ravel()
         u = self.u_derivs(x, 2)
         hess = np.abs(u[0] + u[2] / scale ** 2) / u[0]
-        r = _reciprocal_derivs(u)
+        r = reciprocal_derivs(u)
         r0, r1, r2 = r[0], r[1] * (1.0 / scale), r[2] * (1.0 / scale) ** 2
         geo = np.abs(r0 ** 2 + 2 * r1 ** 2 - r0 * r2) / (r0 ** 2 + r1 ** 2) ** 1.5 * r0
         xe = self._reduce(x, start=self.theta[0])
@@ -372,56 +329,58 @@ class RadialEnvelope:
                 f"span={self.span:.6g}, exact={self.exact}, min_ratio={self.min_ratio:.4g})")
 
 
-
-def _eval_u(x, t, m, A, B, kernel, nmax, exact):
-    """GERBS spline u~ = sum_j G_j u_j (eq. (3)) and its derivatives at x (one envelope:
-    knots t, local functions u_j = A_j cos(x - m_j) + B_j). ``exact``: no blending."""
-    j = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
-    return _eval_pieces(x, t[j], t[j + 1], m[j], m[j + 1], A[j], A[j + 1], B[j], B[j + 1],
-                        kernel, nmax, exact)
-
-
-def _eval_pieces(x, t0, t1, m0, m1, A0, A1, B0, B1, kernel, nmax, exact):
-    """u~ and its derivatives at x on the knot intervals [t0, t1] (all arrays of x's shape),
-    the local functions u_0 = A0 cos(x - m0) + B0 and u_1 likewise.
-
-    u~ = u_0 + F(w) (u_1 - u_0), w = (x - t0)/h, and by Leibniz
-    u~^(nu) = u_0^(nu) + sum_i C(nu,i) F^(i)(w) h^-i D^(nu-i), D = u_1 - u_0.
-    """
-    out = np.empty((nmax + 1,) + x.shape)
-    phase = [i * _HALF_PI for i in range(nmax + 1)]
-    a = [A0 * np.cos(x - m0 + ph) for ph in phase]
-    a[0] = a[0] + B0
-    if exact:
-        out[:] = a
-        return out
-    h = t1 - t0
-    # (1-d input: some kernels mishandle 0-d arrays)
-    w = np.atleast_1d((x - t0) / h)
-    F = kernel.cdf_derivs(w, nmax).reshape((nmax + 1,) + x.shape)
-    D = [A1 * np.cos(x - m1 + ph) - ai for ph, ai in zip(phase, a)]
-    D[0] = D[0] + B1
-    hinv = 1.0 / h
-    for nu in range(nmax + 1):
-        acc = a[nu].copy()
-        hp = np.ones_like(h)
-        for i in range(nu + 1):
-            acc += math.comb(nu, i) * F[i] * hp * D[nu - i]
-            hp = hp * hinv
-        out[nu] = acc
-    return out
-
-
-def _reciprocal_derivs(u):
-    """Derivatives of 1/u from those of u (orders 0..3), stacked like ``u``."""
-    nmax = len(u) - 1
-    out = np.empty_like(u)
-    inv = 1.0 / u[0]
-    out[0] = inv
-    if nmax >= 1:
-        out[1] = -u[1] * inv ** 2
-    if nmax >= 2:
-        out[2] = 2 * u[1] ** 2 * inv ** 3 - u[2] * inv ** 2
-    if nmax >= 3:
-        out[3] = -u[3] * inv ** 2 + 6 * u[1] * u[2] * inv ** 3 - 6 * u[1] ** 3 * inv ** 4
-    return out
+def _ring_polar(ring, closed):
+    """(theta, radius) (K+1,) of boundary vertices (K, 2) about the origin, checked to
+    form a star (the rules of :meth:`RadialEnvelope.from_ring`)."""
+    ring = np.array(ring, dtype=np.float64)
+    if ring.ndim != 2 or ring.shape[1] != 2:
+        raise InvalidParameterError("ring", f"expected shape (K, 2), got {ring.shape}")
+    nonfinite = np.flatnonzero(~np.isfinite(ring).all(axis=1))
+    if nonfinite.size:
+        raise InvalidPointSetError("ring has non-finite coordinates at indices", nonfinite)
+    if closed and len(ring) >= 2 and np.array_equal(ring[0], ring[-1]):
+        ring = ring[:-1]
+    need = 3 if closed else 2
+    if len(ring) < need:
+        raise InvalidPointSetError(
+            f"a {'closed' if closed else 'open'} star needs at least {need} ring "
+            f"vertices, got {len(ring)}")
+    r = np.hypot(ring[:, 0], ring[:, 1])
+    at0 = np.flatnonzero(r <= 0.0)
+    if at0.size:
+        raise InvalidPointSetError("ring vertices coincide with the centre at indices", at0)
+    nxt = np.roll(ring, -1, axis=0) if closed else ring[1:]
+    cur = ring if closed else ring[:-1]
+    cross = cur[:, 0] * nxt[:, 1] - cur[:, 1] * nxt[:, 0]
+    dot = (cur * nxt).sum(axis=1)
+    k = np.arange(len(cur))
+    j = (k + 1) % len(ring)
+    scale = np.hypot(cur[:, 0], cur[:, 1]) * np.hypot(nxt[:, 0], nxt[:, 1])
+    on_edge = (np.abs(cross) <= 1e-12 * scale) & (dot < 0)
+    if on_edge.any():
+        e = np.flatnonzero(on_edge)
+        raise InvalidPointSetError(
+            "the centre lies on a boundary edge; ring indices",
+            np.unique(np.concatenate([k[e], j[e]])))
+    nonpos = cross <= 1e-12 * scale
+    if nonpos.any():
+        e = np.flatnonzero(nonpos)
+        raise InvalidPointSetError(
+            "ring is not star-shaped w.r.t. the centre (edges seen at a non-positive "
+            "angle, i.e. not counter-clockwise); ring indices",
+            np.unique(np.concatenate([k[e], j[e]])))
+    dth = np.arctan2(cross, dot)
+    total = dth.sum()
+    if closed and abs(total - TWO_PI) > 1e-9:
+        first = int(np.searchsorted(np.cumsum(dth), TWO_PI + 1e-9))
+        raise InvalidPointSetError(
+            f"ring winds {total / TWO_PI:.3g} times around the centre (not star-shaped); "
+            "it overlaps itself from ring index", [min(first, len(ring) - 1)])
+    if not closed and total >= TWO_PI:
+        raise InvalidPointSetError("open ring spans >= 2*pi around the centre")
+    th0 = math.atan2(ring[0, 1], ring[0, 0])
+    theta = th0 + np.concatenate([[0.0], np.cumsum(dth)])
+    if closed:
+        theta[-1] = th0 + TWO_PI
+        r = np.append(r, r[0])
+    return theta, r

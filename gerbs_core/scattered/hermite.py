@@ -6,14 +6,15 @@ Taylor polynomial of the data at x_i (section 2.6, item 1); see
 """
 from __future__ import annotations
 
-
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..errors import InvalidParameterError, InvalidPointSetError
+from ..errors import InvalidParameterError
 from . import budget as _budget
 from . import covers as _covers
 from .balls import BallCover
+from .candidates import StarCandidates, delaunay_candidates
+from .hermite_data import hermite_data
 from .metric_forms import as_metric
 from .metrics import Euclidean
 from .partition import disjoint_basis, general_basis, minimal_basis
@@ -113,7 +114,7 @@ class GERBSInterpolator:
         if not (isinstance(degree, (int, np.integer)) and 0 <= degree <= 3):
             raise InvalidParameterError("degree", f"Taylor degree must be 0..3, got {degree!r}")
         self.degree = int(degree)
-        D = self._data(values, gradients, hessians, N, n)
+        D, self.vshape, self._V = hermite_data(values, gradients, hessians, N, n)
         self._setup_cover(cover, basis, metric, rho, R, domain,
                           dict(kappa=kappa, shrink=shrink, exact=exact_gauge))
         # ---- local functions -------------------------------------------
@@ -174,7 +175,7 @@ class GERBSInterpolator:
                 self.cover, self.domain = _covers.voronoi_cover(self.points, self.kernel, domain=domain, **gauge_kw)
             else:
                 self.cover = _covers.polygon_cover(self.points, list(cover), self.kernel, **gauge_kw)
-            self._centre_tree = None
+            self._star_candidates = None
         else:
             self.cover = DelaunayStarCover(self.points, self.kernel, tree=self._tree, **gauge_kw)
             self.tri, self.simplices = self.cover.tri, self.cover.simplices
@@ -200,35 +201,6 @@ class GERBSInterpolator:
         """True if the automatic ball radii provably cover the hull (psi >= b(0.9))."""
         return self.cover.certified
 
-    def _data(self, values, gradients, hessians, N, n):
-        vals = np.array(values, dtype=float, copy=True)
-        if vals.ndim == 0 or vals.shape[0] != N:
-            raise InvalidParameterError("values", f"expected shape (N={N}, ...), got {np.shape(values)}")
-        self.vshape = vals.shape[1:]
-        V = int(np.prod(self.vshape)) if self.vshape else 1
-        self._V = V
-        bad = np.flatnonzero(~np.all(np.isfinite(vals.reshape(N, -1)), axis=1))
-        if bad.size:
-            raise InvalidPointSetError("values: non-finite (NaN or inf) at indices", bad)
-        D = [vals.reshape(N, V)]
-        if hessians is not None and gradients is None:
-            raise InvalidParameterError("hessians", "Hessians need gradients too")
-        for name, arr, k in (("gradients", gradients, 1), ("hessians", hessians, 2)):
-            if arr is None:
-                break
-            a = np.array(arr, dtype=float, copy=True)
-            want = (N,) + self.vshape + (n,) * k
-            if a.shape != want:
-                raise InvalidParameterError(name, f"expected shape {want}, got {a.shape}")
-            bad = np.flatnonzero(~np.all(np.isfinite(a.reshape(N, -1)), axis=1))
-            if bad.size:
-                raise InvalidPointSetError(f"{name}: non-finite (NaN or inf) at indices", bad)
-            a = a.reshape((N, V) + (n,) * k)
-            if k == 2:
-                a = 0.5 * (a + np.swapaxes(a, -1, -2))
-            D.append(a)
-        return D
-
     def _nearest_d(self):
         return nearest_distances(self.points, Euclidean(self.n), self._tree)
 
@@ -238,38 +210,15 @@ class GERBSInterpolator:
         if self.cover_kind == "balls" or not self._planar:
             return self.cover.candidates(x), None
         if self.cover_kind == "delaunay":
-            # small tolerance: points on the hull boundary belong to the domain
-            simp = self.tri.find_simplex(x, tol=1e-12)
-            ok = simp >= 0
-            idx = np.where(ok[:, None], self.simplices[np.maximum(simp, 0)], -1)
-            edge = np.where(ok[:, None], 3 * np.maximum(simp, 0)[:, None] + np.arange(3), -1)
-            return idx, edge
+            return delaunay_candidates(self.tri, self.simplices, x)
+        if self._star_candidates is None:
+            self._star_candidates = StarCandidates(self.points, self._tree,
+                                                   self.cover.support_radius)
         idx = self._star_candidates(x)
         if self.domain is not None:
             inside = _covers.in_convex_polygon(x, self.domain)
             idx[~inside] = -1
         return idx, None
-    def _star_candidates(self, x):
-        """Stars whose support radius reaches x. Typical stars through a KD-tree ball
-        query with radius r = the 99 % quantile of the support radii; the few larger ones (cells at
-        the domain boundary) by a direct distance check, so the query stays local."""
-        R = self.cover.support_radius
-        if self._centre_tree is None:
-            self._centre_tree = self._tree            # the fit's tree of the points
-            self._r_typ = float(np.quantile(R, 0.99))
-            self._big = np.flatnonzero(R > self._r_typ)
-        idx = _covers.padded_ball_query(self._centre_tree, x, self._r_typ * (1 + 1e-12))
-        j = np.maximum(idx, 0)
-        d = np.linalg.norm(x[:, None, :] - self.points[j], axis=-1)
-        idx = np.where((idx >= 0) & (d < R[j]) & (R[j] <= self._r_typ), idx, -1)
-        if self._big.size:
-            db = np.linalg.norm(x[:, None, :] - self.points[self._big], axis=-1)
-            idx = np.concatenate([idx, np.where(db < R[self._big], self._big, -1)], axis=1)
-        # compact: valid entries first, drop all-empty columns
-        o = np.argsort(idx < 0, axis=1, kind="stable")
-        idx = np.take_along_axis(idx, o, 1)
-        width = max(int((idx >= 0).sum(1).max()) if idx.size else 0, 1)
-        return idx[:, :width]
 
     def _jets(self, x, idx, edge, nu):
         """psi and phi jets (M, K, ...) of the candidates."""

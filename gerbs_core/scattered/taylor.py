@@ -138,6 +138,26 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
     M = len(alphas)
     if M == 0:
         return {}
+    K = _neighbour_count(N, n, M, fit_degree, n_neighbors)
+    tree = cKDTree(points) if tree is None else tree
+    V = D_known[0].shape[1]
+    if chunk is None:
+        rows = K * (1 + (n if known >= 1 else 0))
+        per_point = 8 * (rows * (3 * M + 2 * V + 3 * n + 4) + M * (M + V) * 3)
+        chunk = int(max(64, min(N, work_bytes // per_point)))
+    order = np.array(alphas, dtype=float).sum(1)
+    out_coeffs = np.empty((M, N, V))
+    for s in range(0, N, chunk):
+        e = min(N, s + chunk)
+        dist, nb = tree.query(points[s:e], k=K + 1)
+        h = dist[:, -1]
+        c = _fit_chunk(points, D_known, s, e, nb[:, 1:], h, alphas, fit_degree)
+        out_coeffs[:, s:e, :] = (c / h[:, None, None] ** order[None, :, None]).transpose(1, 0, 2)
+    return tensors_from_coeffs(list(out_coeffs), alphas, n, fit_degree)
+
+
+def _neighbour_count(N, n, M, fit_degree, n_neighbors):
+    """The stencil size K for M unknown coefficients, checked against the data."""
     K = _default_neighbors(M) if n_neighbors is None else int(n_neighbors)
     if K < M:
         raise InvalidParameterError("n_neighbors", f"need >= {M} neighbours for fit_degree {fit_degree}")
@@ -145,54 +165,55 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
         raise InvalidPointSetError(
             f"points: {N} points are too few to estimate derivatives up to order {fit_degree} "
             f"in n={n} (need at least {M + 1}); give derivatives or lower the degree")
-    K = min(K, N - 1)
-    tree = cKDTree(points) if tree is None else tree
-    V = D_known[0].shape[1]
-    if chunk is None:
-        rows = K * (1 + (n if known >= 1 else 0))
-        per_point = 8 * (rows * (3 * M + 2 * V + 3 * n + 4) + M * (M + V) * 3)
-        chunk = int(max(64, min(N, work_bytes // per_point)))
-    expo = np.array(alphas, dtype=float)                       # (M, n)
+    return min(K, N - 1)
+
+
+def _fit_chunk(points, D_known, s, e, nb, h, alphas, fit_degree):
+    """The scaled coefficients c_alpha (c, M, V) of points s..e from their neighbours
+    nb (c, K), h (c,) the farthest neighbour's distance (module docstring's model)."""
+    A, B, W = _equations(points, D_known, s, e, nb, h, alphas, fit_degree)
+    At = np.concatenate(A, axis=2) if len(A) > 1 else A[0]                 # (c, M, rows)
+    B = np.concatenate(B, axis=1)
+    W = np.concatenate(W, axis=1)
+    AWt = At * W[:, None, :]                                               # (c, M, rows)
+    # batched normal equations: each 2-D slice is BLAS-able (contiguous / transposed)
+    G = np.matmul(AWt, np.swapaxes(At, 1, 2))
+    M = G.shape[1]
+    tr = np.trace(G, axis1=1, axis2=2)
+    G += (1e-12 * tr / M)[:, None, None] * np.eye(M)
+    return np.linalg.solve(G, np.matmul(AWt, B))                           # (c, M, V)
+
+
+def _equations(points, D_known, s, e, nb, h, alphas, fit_degree):
+    """Weighted least-squares equations of points s..e: lists of design blocks
+    (c, M, K), right-hand sides (c, K, V) and weights (c, K): the values, then (with
+    known gradients) one block per gradient component."""
+    n = points.shape[1]
+    known = len(D_known) - 1
+    expo = np.array(alphas, dtype=float)                                   # (M, n)
     fact = np.array([np.prod([math.factorial(a) for a in al]) for al in alphas])
-    order = expo.sum(1)
-    out_coeffs = np.empty((M, N, V))
-    for s in range(0, N, chunk):
-        e = min(N, s + chunk)
-        dist, nb = tree.query(points[s:e], k=K + 1)
-        dist, nb = dist[:, 1:], nb[:, 1:]
-        h = dist[:, -1]
-        dx = points[nb] - points[s:e, None, :]                                  # (c, K, n)
-        u = dx / h[:, None, None]
-        r = np.linalg.norm(u, axis=-1)
-        w = (1.0 - (r / 1.2) ** 2) ** 2
-        Dloc = [Dk[s:e, None] for Dk in D_known]                               # broadcast over K
-        Tv, Tg, _ = taylor_jet(Dloc, dx, 1 if known >= 1 else 0)
-        ut = np.ascontiguousarray(np.moveaxis(u, -1, 0))                       # (n, c, K)
-        pw = [np.ones(ut.shape)]
-        for _ in range(fit_degree):
-            pw.append(pw[-1] * ut)                                             # u^k per coordinate
-        A = [_monomials(pw, alphas, fact)]                                     # (c, M, K)
-        B = [D_known[0][nb] - Tv]                                              # (c, K, V)
-        W = [w]
-        if known >= 1:
-            # gradient equations: h (grad f(x_j) - grad T_known(x_j)) = sum c_a d/du_l (u^a/a!)
-            for l in range(n):
-                dal = [tuple(a[k] - (k == l) if a[k] > 0 or k != l else 0 for k in range(n)) for a in alphas]
-                coef = expo[:, l]
-                A.append(coef[None, :, None] * _monomials(pw, dal, fact))
-                B.append(h[:, None, None] * (D_known[1][nb][..., l] - Tg[..., l]))
-                W.append(w)
-        At = np.concatenate(A, axis=2) if len(A) > 1 else A[0]                 # (c, M, rows)
-        B = np.concatenate(B, axis=1)
-        W = np.concatenate(W, axis=1)
-        AWt = At * W[:, None, :]                                               # (c, M, rows)
-        # batched normal equations: each 2-D slice is BLAS-able (contiguous / transposed)
-        G = np.matmul(AWt, np.swapaxes(At, 1, 2))
-        tr = np.trace(G, axis1=1, axis2=2)
-        G += (1e-12 * tr / M)[:, None, None] * np.eye(M)
-        c = np.linalg.solve(G, np.matmul(AWt, B))                              # (c, M, V)
-        out_coeffs[:, s:e, :] = (c / h[:, None, None] ** order[None, :, None]).transpose(1, 0, 2)
-    return tensors_from_coeffs(list(out_coeffs), alphas, n, fit_degree)
+    dx = points[nb] - points[s:e, None, :]                                  # (c, K, n)
+    u = dx / h[:, None, None]
+    r = np.linalg.norm(u, axis=-1)
+    w = (1.0 - (r / 1.2) ** 2) ** 2
+    Dloc = [Dk[s:e, None] for Dk in D_known]                               # broadcast over K
+    Tv, Tg, _ = taylor_jet(Dloc, dx, 1 if known >= 1 else 0)
+    ut = np.ascontiguousarray(np.moveaxis(u, -1, 0))                       # (n, c, K)
+    pw = [np.ones(ut.shape)]
+    for _ in range(fit_degree):
+        pw.append(pw[-1] * ut)                                             # u^k per coordinate
+    A = [_monomials(pw, alphas, fact)]                                     # (c, M, K)
+    B = [D_known[0][nb] - Tv]                                              # (c, K, V)
+    W = [w]
+    if known >= 1:
+        # gradient equations: h (grad f(x_j) - grad T_known(x_j)) = sum c_a d/du_l (u^a/a!)
+        for l in range(n):
+            dal = [tuple(a[k] - (k == l) if a[k] > 0 or k != l else 0 for k in range(n)) for a in alphas]
+            coef = expo[:, l]
+            A.append(coef[None, :, None] * _monomials(pw, dal, fact))
+            B.append(h[:, None, None] * (D_known[1][nb][..., l] - Tg[..., l]))
+            W.append(w)
+    return A, B, W
 
 
 def averaged_taylor(func_jet, centers, radii, degree, n_quad=8):

@@ -22,11 +22,11 @@ The kernel may differ per knot interval (e.g. BFBS(i_k, i_{k+1}) of
 Definition 4): pass a sequence of n + 1 kernels, one per interval [t_k, t_{k+1}].
 
 Derivatives: G_j^(nu) on the interval [t_k, t_{k+1}] of length h is
-+-F^(nu)(s) / h^nu (chain rule, exact given the kernel's derivatives).
++-F^(nu)(s) / h^nu (chain rule, exact given the kernel's derivatives). Values and
+derivatives come from the one GERBS spline evaluator, :mod:`.evaluate`.
 """
 from __future__ import annotations
 
-import math
 from typing import Sequence
 
 import numpy as np
@@ -34,6 +34,7 @@ import numpy as np
 from ..errors import InvalidParameterError
 from ..kernels import ERBS, Kernel
 from ..kernels.base import as_float_array, check_order
+from .evaluate import blend_jet, falling_jet, knot_interval, rising_jet
 
 __all__ = ["GERBSBasis", "GERBSCurve"]
 
@@ -126,44 +127,46 @@ class GERBSBasis:
         """[t_{j-1}, t_{j+1}] for column j (0-based: G_{j+1}), as a tuple."""
         return float(self._knots[j]), float(self._knots[j + 2])
 
-    def active(self, t, nmax: int = 0):
-        """The (at most) two basis functions alive at each point, with derivatives.
+    def rising(self, t, nmax: int = 0):
+        """The knot interval of each point and the rising B-function there.
 
-        Returns ``(k, fall, rise)`` for the flattened points: ``k`` (P,) int, the
-        knot interval (t_k, t_{k+1}] containing t (-1 left of t_0, n + 1 right of
-        t_{n+1}); ``fall`` (nmax+1, P) the derivatives of column k-1 (G_k, the
-        falling one) and ``rise`` (nmax+1, P) those of column k (G_{k+1}, rising).
-        Entries for non-existing columns are 0; NaN t gives NaN.
+        Returns ``(k, rise)`` for the flattened points: ``k`` (P,) int, the knot interval
+        (t_k, t_{k+1}] containing t (-1 left of t_0, n + 1 right of t_{n+1}), and
+        ``rise`` (nmax+1, P) the derivatives of F_{k+1}(t) = F((t - t_k) / h_k) on it
+        (:func:`~gerbs_core.splines.evaluate.rising_jet`; 0 outside [t_0, t_{n+1}]).
+        NaN t gives NaN.
         """
         nmax = check_order(nmax, self.max_order, name="nu")
         t = as_float_array(t).ravel()
-        kn = self._knots
-        k = np.searchsorted(kn, t, side="left") - 1      # t in (t_k, t_{k+1}]
+        k = knot_interval(self._knots, t, side="left")
         nan = np.isnan(t)
         k[nan] = 0
         inside = (k >= 0) & (k <= self.n)
         kc = np.clip(k, 0, self.n)
-        s = (t - kn[kc]) / self._h[kc]
+        s = (t - self._knots[kc]) / self._h[kc]
         rise = np.zeros((nmax + 1, t.size))
-        if self._kernel is not None:
-            rise[:, inside] = self._kernel.cdf_derivs(s[inside], nmax)
-        else:
-            for i, ker in enumerate(self._kernels):
-                sel = inside & (kc == i)
-                if sel.any():
-                    rise[:, sel] = ker.cdf_derivs(s[sel], nmax)
-        scale = 1.0 / self._h[kc]
-        for m in range(1, nmax + 1):
-            rise[m] *= scale ** m
-        fall = -rise
-        fall[0] += 1.0
-        fall[:, ~inside] = 0.0
+        for i, ker in enumerate(self._kernels if self._kernel is None else (self._kernel,)):
+            sel = inside if self._kernel is not None else inside & (kc == i)
+            if sel.any():
+                rise[:, sel] = rising_jet(ker, s[sel], self._h[kc[sel]], nmax)
+        if nan.any():
+            rise[:, nan] = np.nan
+        return k, rise
+
+    def active(self, t, nmax: int = 0):
+        """The (at most) two basis functions alive at each point, with derivatives.
+
+        Returns ``(k, fall, rise)`` for the flattened points: ``k`` as :meth:`rising`;
+        ``fall`` (nmax+1, P) the derivatives of column k-1 (G_k, the falling one) and
+        ``rise`` (nmax+1, P) those of column k (G_{k+1}, rising). Entries for
+        non-existing columns are 0; NaN t gives NaN.
+        """
+        k, rise = self.rising(t, nmax)
+        fall = falling_jet(rise)
+        fall[:, (k < 0) | (k > self.n)] = 0.0
         # G_{n+1} and G_0 do not exist
         rise[:, k == self.n] = 0.0
         fall[:, k == 0] = 0.0
-        if nan.any():
-            rise[:, nan] = np.nan
-            fall[:, nan] = np.nan
         return k, fall, rise
 
     def __call__(self, t, nu: int = 0) -> np.ndarray:
@@ -258,25 +261,28 @@ class GERBSCurve:
             out += L[j, i]
         return out
 
+    def _local_jet(self, col, centre, t, nu):
+        """Jets (nu+1, P, d) of the local curves of columns ``col`` about knots
+        ``centre``; 0 where the column does not exist (beyond G_1 and G_n)."""
+        n = self._basis.n
+        out = np.zeros((nu + 1, t.size, self.dim))
+        ok = (col >= 0) & (col <= n - 1)
+        if ok.any():
+            dt = t[ok] - self._basis.knots[centre[ok]]
+            for r in range(nu + 1):
+                out[r, ok] = self._local(col[ok], dt, r)
+        return out
+
     def __call__(self, t, nu: int = 0) -> np.ndarray:
         """c^(nu)(t): array (*t.shape, d)."""
         nu = check_order(nu, self._basis.max_order - self._nu0)
         nu += self._nu0
         t = as_float_array(t)
-        k, fall, rise = self._basis.active(t, nu)
+        k, rise = self._basis.rising(t, nu)
         tf = t.ravel()
-        kn = self._basis.knots
-        n = self._basis.n
-        out = np.zeros((tf.size, self.dim))
-        # falling G_k (column k-1, centred at t_k = kn[k]); rising G_{k+1} (column k, at kn[k+1])
-        for G, col, centre in ((fall, k - 1, k), (rise, k, k + 1)):
-            ok = (col >= 0) & (col <= n - 1)
-            if not ok.any():
-                continue
-            j = col[ok]
-            dt = tf[ok] - kn[centre[ok]]
-            for i in range(nu + 1):
-                w = math.comb(nu, i) * G[i, ok]
-                out[ok] += w[:, None] * self._local(j, dt, nu - i)
+        # falling G_k (column k-1, centred at t_k); rising G_{k+1} (column k, at t_{k+1})
+        left = self._local_jet(k - 1, k, tf, nu)
+        right = self._local_jet(k, k + 1, tf, nu)
+        out = blend_jet(left, right, rise[..., None], nu)[nu]
         out[np.isnan(tf)] = np.nan
         return out.reshape(t.shape + (self.dim,))
