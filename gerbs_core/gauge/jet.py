@@ -61,13 +61,11 @@ def star_gauge_jet(r_jet, theta_jet, u, nu: int):
 
 def bump_derivs(kernel, t, nu: int):
     """[b, b', b''][:nu + 1] of the GERBS bump b = 1 - F on [0, 1), 0 beyond (eq. (1)), at
-    t >= 0 (F the kernel's CDF); exactly 0 (values and derivatives) for t >= 1."""
-    d = kernel.cdf_derivs(np.minimum(t, 1.0), max(nu, 0))
+    t >= 0: the kernel's own :meth:`~gerbs_core.kernels.base.Kernel.bump_derivs`, set to
+    exactly 0 (values and derivatives) for t >= 1, where the support ends."""
+    b = kernel.bump_derivs(np.minimum(t, 1.0), max(nu, 0))
     inside = t < 1.0
-    out = [np.where(inside, 1.0 - d[0], 0.0)]
-    for k in range(1, nu + 1):
-        out.append(np.where(inside, -d[k], 0.0))
-    return out
+    return [np.where(inside, b[k], 0.0) for k in range(nu + 1)]
 
 
 def chain_jet(bt, g_jet, nu: int):
