@@ -18,7 +18,10 @@ with what was last built:
 * anything else -> a full rebuild through ``gerbs_core`` and a new result mesh.
 
 Every write stores the input it was built from on the result (snapshot.py), which
-is what the node group checks before showing it.
+is what the node group checks before showing it, with a new stamp: while the node
+group shows a result that still carries the stamp its state wrote, the state's input
+is the record and nothing is read back (an update that changes nothing costs a few
+look-ups).
 
 Viewport and render: a depsgraph in RENDER mode (a final render's frame change)
 syncs the render result at the Render Resolution, from what the modifier receives
