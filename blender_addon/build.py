@@ -85,10 +85,12 @@ def write_geometry(mesh, built: Built, previous: Transfer | None, inp) -> Transf
     return Transfer(built.lattice, True, built.values, inp, out_edges, built.surface.repair)
 
 
-def write_carried(res, mod, transfer: Transfer, inp, record) -> None:
-    """The carried layers of `inp` on result object `res`, its record and the names."""
+def write_carried(res, mod, transfer: Transfer, inp, record) -> str:
+    """The carried layers of `inp` on result object `res`, its record and the names;
+    returns the record's stamp (snapshot.stamp)."""
     carried = inp.carried
     carry_write.write_layers(res, [transfer.layer(layer) for layer in carried.layers], carried)
-    snapshot.write_snapshot(res.data, inp, record)
+    stamp = snapshot.write_snapshot(res.data, inp, record)
     gn.set_names(mod, snapshot.layer_table(carried)[0])
     res.data.update()
+    return stamp

@@ -18,7 +18,10 @@ with what was last built:
 * anything else -> a full rebuild through ``gerbs_core`` and a new result mesh.
 
 Every write stores the input it was built from on the result (snapshot.py), which
-is what the node group checks before showing it.
+is what the node group checks before showing it, with a new stamp: while the node
+group shows a result that still carries the stamp its state wrote, the state's input
+is the record and nothing is read back (an update that changes nothing costs a few
+look-ups).
 
 Viewport and render: a depsgraph in RENDER mode (a final render's frame change)
 syncs the render result at the Render Resolution, from what the modifier receives
@@ -72,6 +75,7 @@ class SurfaceState:
     transfer: object = None  # transfer.Transfer: the output's maps of carried layers
     points: np.ndarray | None = None  # (P, 3) float64 last output (for partial updates)
     record: tuple = ()  # the settings record written with the result
+    stamp: str = ""  # snapshot.stamp of the record this state last wrote ("" none/failed)
     partial_updates: int = 0
     n_points: int = 0
     n_faces: int = 0  # output faces (quads in quad faces, triangles elsewhere)
@@ -136,7 +140,7 @@ def set_error(obj, mod, message: str, warning: str = "") -> None:
 
 
 def _fail(obj, mod, key, st, message, progress, problem=None, render=False) -> SyncResult:
-    st.error, st.stencil, st.problem = message, None, problem
+    st.error, st.stencil, st.problem, st.stamp = message, None, problem, ""
     _states[key] = st
     if not render:  # the Error input is shared: a render's failure must not hide the viewport
         set_error(obj, mod, message)
@@ -196,9 +200,10 @@ def _counts(mesh) -> tuple:
     return len(mesh.vertices), len(mesh.polygons), len(mesh.loops)
 
 
-def _fresh_input(obj, mod, depsgraph, res, render, settings):
-    """The input while the node group shows a result: that result's record. None when a
-    render shows the viewport surface and may keep it (same resolution)."""
+def _fresh_input(obj, mod, depsgraph, res, st, render, settings):
+    """The input while the node group shows a result: that result's record (`st`'s input
+    while the record carries the stamp `st` wrote: nothing to read). None when a render
+    shows the viewport surface and may keep it (same resolution)."""
     shown = res
     if render:
         final = obj.evaluated_get(depsgraph).data
@@ -206,6 +211,9 @@ def _fresh_input(obj, mod, depsgraph, res, render, settings):
             if settings["render_resolution"] == settings["resolution"]:
                 return None
             shown = gn.get_result(mod) or res
+    if (shown is res and st is not None and st.stamp and not st.error
+            and st.result_uid == res.session_uid and snapshot.stamp_of(res.data) == st.stamp):
+        return st.input
     return snapshot.read_snapshot(shown.evaluated_get(depsgraph).data, gn.get_names(mod))
 
 
@@ -248,7 +256,7 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
         return _fail(obj, mod, key, blank, problem, progress, render=render)
     retry = False
     if inp is stack.FRESH:
-        inp = _fresh_input(obj, mod, depsgraph, res, render, settings)
+        inp = _fresh_input(obj, mod, depsgraph, res, st, render, settings)
         if inp is None and render:
             return SyncResult("unchanged")
         if inp is not None:
@@ -287,7 +295,7 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
     carried_same = (np.array_equal(st.input.materials, inp.materials)
                     and inp.carried.same(st.input.carried))
     if st.input.same_geometry(inp) and settled:  # only what it carries changed
-        write_carried(res, mod, st.transfer, inp, st.record)
+        st.stamp = write_carried(res, mod, st.transfer, inp, st.record)
         st.input = inp
         st.update_seconds = time.perf_counter() - t0
         obj.update_tag()
@@ -296,9 +304,9 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
             and len(res.data.vertices) == st.n_points and np.all(np.isfinite(inp.positions))):
         X = inp.positions.astype(np.float64)
         if carried_same:
-            snapshot.write_positions(res.data, inp)
+            st.stamp = snapshot.write_positions(res.data, inp)
         else:
-            write_carried(res, mod, st.transfer, inp, st.record)
+            st.stamp = write_carried(res, mod, st.transfer, inp, st.record)
         mesh_io.write_positions(res.data, apply_stencil(st, X))  # (tags the mesh)
         st.input, st.positions = inp, X
         st.update_seconds = time.perf_counter() - t0
@@ -343,7 +351,7 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
     for warning in st.warnings:
         log.warning("GERBS: %s: %s", obj.name, warning.message)
     st.record = gn.settings_record(settings, resolution)
-    write_carried(res, mod, st.transfer, inp, st.record)
+    st.stamp = write_carried(res, mod, st.transfer, inp, st.record)
     st.n_points, st.n_faces = len(P), st.transfer.n_faces
     st.n_triangles = built.lattice.n_triangles
     st.build_seconds = time.perf_counter() - t0

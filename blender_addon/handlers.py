@@ -3,7 +3,9 @@
 ``depsgraph_update_post`` and ``frame_change_post`` look at the depsgraph's
 updates only: an update of anything but a mesh object whose geometry (or
 shading) changed costs one type check; a mesh object is synced when it carries a
-GERBS modifier. Frame changes matter because animation, drivers and shape-key
+GERBS modifier. In Edit Mode a shading-only update is a selection change (the
+select operators tag ``ID_RECALC_SELECT``; material and UV edits tag the geometry
+too) and is skipped. Frame changes matter because animation, drivers and shape-key
 values change what the modifier receives without any edit. The sync runs right
 in the handler (no ``bpy.ops``, a module-level guard against re-entrancy, and
 :func:`engine.sync` writes nothing when nothing changed): Blender evaluates the
@@ -195,6 +197,8 @@ def _candidates(depsgraph):
         if not (update.is_updated_geometry or update.is_updated_shading):
             continue
         obj = idb.original
+        if not update.is_updated_geometry and obj.mode == "EDIT":
+            continue  # Edit Mode selection (ID_RECALC_SELECT): nothing a surface depends on
         if gn.gerbs_modifiers(obj):
             objects.append(obj)
         elif engine.known(obj):  # its GERBS modifier was removed or applied

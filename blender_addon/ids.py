@@ -67,6 +67,8 @@ N_COUNTS = 5  # SNAP_COUNT + 0..4 (one attribute each: any mesh has a first poin
 SNAPSHOT_ATTRIBUTES = (SNAP_POSITION, SNAP_NORMAL, SNAP_CORNER, SNAP_FACE_SIZE, SNAP_MATERIAL,
                        SNAP_EDGE_A, SNAP_EDGE_B, SNAP_LAYERS) + tuple(
     f"{SNAP_COUNT}{k}" for k in range(N_COUNTS))  # + SNAP_SETTINGS + k (record_names())
+RECORD_STAMP = "gerbs_record"  # custom property on a result mesh: a new stamp with every
+#                                record write (snapshot.stamp; undo restores an old one)
 OUT_WEIGHT = ".gerbs_src_weight_"  # + i: POINT FLOAT, output weights of vertex-group layer i
 #                                   (the node group stores them into the result's group)
 # What the modifier received, on the geometry it passes on while it shows no surface

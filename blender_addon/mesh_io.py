@@ -12,10 +12,12 @@ evaluated mesh comes from; snapshot.py stores an input on its result.
 Positions through ``attributes["position"].data.foreach_get/foreach_set
 ("vector", ...)`` on float32 buffers (25-50x faster than
 ``vertices.foreach_get("co")``; a float64 buffer forces a slow per-item
-conversion), topology through ``polygons.foreach_get("loop_total"/
-"loop_start")`` and the ``.corner_vert`` attribute (0.2 ms for 360k corners;
-``loops.foreach_get("vertex_index")``: 14 ms). New topology is written through
-``.corner_vert`` too (0.2 ms instead of 70 ms for 750k corners).
+conversion), topology through ``polygons.foreach_get("loop_start")`` and the
+``.corner_vert`` attribute (0.2 ms for 360k corners; ``loops.foreach_get
+("vertex_index")``: 14 ms), material indices and edges through their raw attributes
+(``material_index``, ``.edge_verts``: 35k-vertex mesh 0.03 ms, against ~20 ms face by
+face or edge by edge). New topology is written through ``.corner_vert`` too (0.2 ms
+instead of 70 ms for 750k corners).
 
 Shapes: positions (V, 3) float32 as stored (the core gets them as float64);
 topology as CSR ``offsets (F+1,)`` int64 and ``corners (C,)`` int32 (vertex of
@@ -45,18 +47,25 @@ class MeshInput:
     carried: object = None  # attributes.Carried
 
     def same_topology(self, other) -> bool:
+        if other is self:
+            return True
         return (other is not None and np.array_equal(self.offsets, other.offsets)
                 and np.array_equal(self.corners, other.corners))
 
     def same_geometry(self, other) -> bool:
         """Positions, topology and normals equal (bit for bit; NaN never equals): the
-        surface is the same (what it carries may still differ)."""
+        surface is the same (what it carries may still differ). An input is the same as
+        itself (its record, NaN or not, is what the node group found equal)."""
+        if other is self:
+            return True
         return (self.same_topology(other) and np.array_equal(self.positions, other.positions)
                 and (self.normals is None) == (other.normals is None)
                 and (self.normals is None or np.array_equal(self.normals, other.normals)))
 
     def same(self, other) -> bool:
         """Everything equal: the geometry, the material indices and what it carries."""
+        if other is self:
+            return self.carried is not None
         return (self.same_geometry(other) and np.array_equal(self.materials, other.materials)
                 and self.carried is not None and self.carried.same(other.carried))
 
@@ -92,22 +101,38 @@ def read_positions(mesh) -> np.ndarray:
 
 def read_topology(mesh, with_loops: bool = False):
     """Faces of an evaluated or add-on-owned mesh as CSR (offsets int64, corners int32);
-    with_loops: also the Blender loop of each CSR corner (None when they coincide)."""
-    n_faces = len(mesh.polygons)
-    sizes = _get(mesh.polygons, "loop_total", n_faces, np.int32)
+    with_loops: also the Blender loop of each CSR corner (None when they coincide).
+
+    One per-face read (``loop_start``: Blender stores faces as increasing offsets into
+    the corners, so the sizes are their differences); ``loop_total`` (a second per-face
+    read) only for faces not in loop order."""
+    n_faces, n_corners = len(mesh.polygons), len(mesh.loops)
     attr = mesh.attributes.get(".corner_vert")
     if attr is not None:  # raw attribute read: ~70x faster than loops' vertex_index
-        corners = _get(attr.data, "value", len(mesh.loops), np.int32)
+        corners = _get(attr.data, "value", n_corners, np.int32)
     else:
-        corners = _get(mesh.loops, "vertex_index", len(mesh.loops), np.int32)
-    start = _get(mesh.polygons, "loop_start", n_faces, np.int32)
-    offsets = np.zeros(n_faces + 1, dtype=np.int64)
-    np.cumsum(sizes, out=offsets[1:])
+        corners = _get(mesh.loops, "vertex_index", n_corners, np.int32)
+    offsets = np.empty(n_faces + 1, dtype=np.int64)
+    offsets[:-1] = _get(mesh.polygons, "loop_start", n_faces, np.int32)
+    offsets[-1] = n_corners
     loops = None
-    if n_faces and not np.array_equal(start, offsets[:-1]):  # faces not in loop order
+    if n_faces and (offsets[0] != 0 or np.any(np.diff(offsets) <= 0)):  # not in loop order
+        start = offsets[:-1].copy()
+        sizes = _get(mesh.polygons, "loop_total", n_faces, np.int32)
+        offsets = np.zeros(n_faces + 1, dtype=np.int64)
+        np.cumsum(sizes, out=offsets[1:])
         loops = np.concatenate([np.arange(s, s + n) for s, n in zip(start, sizes)])
         corners = corners[loops]
     return (offsets, corners, loops) if with_loops else (offsets, corners)
+
+
+def read_materials(mesh) -> np.ndarray:
+    """(F,) int32 material index of each face (the raw ``material_index`` attribute;
+    ``polygons.foreach_get("material_index")`` reads face by face, ~100x slower)."""
+    attr = mesh.attributes.get("material_index")
+    if attr is not None and attr.domain == "FACE" and attr.data_type == "INT":
+        return _get(attr.data, "value", len(mesh.polygons), np.int32)
+    return np.zeros(len(mesh.polygons), dtype=np.int32)  # no attribute: every face 0
 
 
 def read_mesh(mesh, normals: bool = False, positions=None) -> MeshInput:
@@ -116,8 +141,7 @@ def read_mesh(mesh, normals: bool = False, positions=None) -> MeshInput:
     offsets, corners, loops = read_topology(mesh, with_loops=True)
     return MeshInput(
         positions=read_positions(mesh) if positions is None else positions,
-        offsets=offsets, corners=corners,
-        materials=_get(mesh.polygons, "material_index", len(mesh.polygons), np.int32),
+        offsets=offsets, corners=corners, materials=read_materials(mesh),
         normals=_get(mesh.vertex_normals, "vector", len(mesh.vertices), np.float32, 3)
         if normals else None, corner_loops=loops)
 

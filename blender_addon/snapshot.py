@@ -13,11 +13,32 @@ first V / E / F / C elements of its domain (a result has at least as many).
 """
 from __future__ import annotations
 
+import itertools
+import os
+
 import numpy as np
 
 from . import ids
 from .attributes import Carried, Layer
 from .mesh_io import MeshInput, _get
+
+
+# session salt: a stamp saved in a file from another session never equals one made here
+_STAMPS = (f"{os.getpid():x}.{os.urandom(4).hex()}.{k}" for k in itertools.count())
+
+
+def stamp(mesh) -> str:
+    """Mark `mesh`'s record as just written: a stamp never used before in this session,
+    stored on the mesh (a custom property: undo and file loads restore the stamp with
+    the record) and returned. While the mesh still carries the stamp a state kept, its
+    record is the input that state wrote (engine: no need to read it back)."""
+    value = next(_STAMPS)
+    mesh[ids.RECORD_STAMP] = value
+    return value
+
+
+def stamp_of(mesh) -> str:
+    return mesh.get(ids.RECORD_STAMP, "")
 
 
 def put(mesh, name: str, data_type: str, domain: str, values, size: int) -> None:
@@ -63,13 +84,15 @@ def misfit(mesh, inp: MeshInput) -> str:
     return ", ".join(k for k in need if have[k] < need[k])
 
 
-def write_positions(mesh, inp: MeshInput) -> None:
-    """Only the positions (the fast path: nothing else changed)."""
+def write_positions(mesh, inp: MeshInput) -> str:
+    """Only the positions (the fast path: nothing else changed); returns the new stamp."""
     put(mesh, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", inp.positions, len(mesh.vertices))
+    return stamp(mesh)
 
 
-def write_snapshot(mesh, inp: MeshInput, record) -> None:
-    """Store `inp` (with its carried layers) and the settings `record` on the result."""
+def write_snapshot(mesh, inp: MeshInput, record) -> str:
+    """Store `inp` (with its carried layers) and the settings `record` on the result;
+    returns the new stamp."""
     n = _domain_sizes(mesh)
     carried = inp.carried or Carried()
     _, table = layer_table(carried)
@@ -95,6 +118,7 @@ def write_snapshot(mesh, inp: MeshInput, record) -> None:
         put(mesh, ids.SNAP_NORMAL, "FLOAT_VECTOR", "POINT", inp.normals, n["POINT"])
     elif mesh.attributes.get(ids.SNAP_NORMAL) is not None:
         mesh.attributes.remove(mesh.attributes[ids.SNAP_NORMAL])
+    return stamp(mesh)
 
 
 def _put_scalars(mesh, prefix: str, data_type: str, values, size: int) -> None:

@@ -16,9 +16,14 @@ and access to the evaluated mesh's positions:
   1 vert  move one base vertex, evaluate (GERBS with Rest Shape "Follow", the
           default: a rebuild; "1v bound": Rest Shape "Bound", the sparse update)
   all     move every base vertex, evaluate (Rest Shape "Bound")
---edit (with --large: the 35k-vertex triangle mesh) times Edit Mode updates at
-resolution 2: a selection-only change and a one-vertex move (bmesh, then a
-depsgraph update), with and without the GERBS modifier.
+--edit (with --large: the 35k-vertex triangle mesh, else Suzanne) times Edit Mode
+updates at resolution 2, Rest Shape Bound (what a drag of a Follow surface previews
+too): a selection change through the select operator (``select_all``, which tags
+only the selection, as every select tool does), a selection change by a script
+(bmesh, then ``update_edit_mesh``: that tags the geometry, so Blender evaluates
+every modifier), and a one-vertex move (bmesh, then a depsgraph update), with the
+GERBS modifier and without it (its "Edit Mode" toggle off: Blender does not
+evaluate it), alternated round by round.
 "pair" is the median over the rounds of (GERBS / Subsurf) within a round,
 less sensitive to load changing during the run than the ratio of the medians.
 The add-on's node group is made once (printed: "group"; it is removed with the
@@ -241,42 +246,53 @@ def edit_mode(bpy, obj, repeats):
 
     from blender_addon import api
 
-    def times():
-        bpy.ops.object.mode_set(mode="EDIT")
-        bm = bmesh.from_edit_mesh(obj.data)
-        bm.verts.ensure_lookup_table()
-        v = bm.verts[len(bm.verts) // 2]
-        k = [0]
-
-        def select():
-            k[0] += 1
-            v.select_set(k[0] % 2 == 0)
-            bmesh.update_edit_mesh(obj.data, loop_triangles=False, destructive=False)
-            evaluated_positions(bpy, obj)
-
-        def move():
-            k[0] += 1
-            v.co.z += 1e-3 * (-1) ** k[0]
-            bmesh.update_edit_mesh(obj.data, loop_triangles=False, destructive=False)
-            evaluated_positions(bpy, obj)
-        select(), move()  # first updates untimed
-        out = median_time(select, max(repeats, 7)), median_time(move, max(repeats, 7))
-        bpy.ops.object.mode_set(mode="OBJECT")
-        return out
-
     for o in bpy.context.view_layer.objects:
         o.select_set(o == obj)
     bpy.context.view_layer.objects.active = obj
     obj.modifiers.clear()
-    bare = times()
-    for rest in ("follow", "bound"):
-        api.add_surface(obj, resolution=2, rest=rest)
-        with_mod = times()
-        api.remove(obj)
-        print(f"Edit Mode, {obj.name} ({len(obj.data.vertices)} vertices), GERBS r=2 rest={rest}: "
-              f"selection {with_mod[0] * 1e3:.1f} ms (without the modifier {bare[0] * 1e3:.1f} ms, "
-              f"{with_mod[0] / bare[0]:.2f}x); one-vertex move {with_mod[1] * 1e3:.1f} ms "
-              f"(without {bare[1] * 1e3:.1f} ms)", flush=True)
+    mod = api.add_surface(obj, resolution=2, rest="bound")
+    evaluated_positions(bpy, obj)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bm = bmesh.from_edit_mesh(obj.data)
+    bm.verts.ensure_lookup_table()
+    v = bm.verts[len(bm.verts) // 2]
+    k = [0]
+
+    def select_op():  # what the select tools do (ID_RECALC_SELECT)
+        bpy.ops.mesh.select_all(action="TOGGLE")
+        evaluated_positions(bpy, obj)
+
+    def select_script():  # a script's selection change: tags the geometry
+        k[0] += 1
+        v.select_set(k[0] % 2 == 0)
+        bmesh.update_edit_mesh(obj.data, loop_triangles=False, destructive=False)
+        evaluated_positions(bpy, obj)
+
+    def move():
+        k[0] += 1
+        v.co.z += 1e-3 * (-1) ** k[0]
+        bmesh.update_edit_mesh(obj.data, loop_triangles=False, destructive=False)
+        evaluated_positions(bpy, obj)
+
+    cases = {"selection (select operator)": select_op, "selection (script)": select_script,
+             "one-vertex move": move}
+    rows = {(name, on): [] for name in cases for on in (True, False)}
+    for _ in range(max(repeats, 7)):  # rounds: with and without, side by side
+        for on in (True, False):
+            mod.show_in_editmode = on  # off: Blender does not evaluate GERBS in Edit Mode
+            for name, fn in cases.items():
+                fn()  # the first update after a switch: not timed
+                rows[name, on].append(median_time(fn, 3))
+    mod.show_in_editmode = True
+    bpy.ops.object.mode_set(mode="OBJECT")
+    api.remove(obj)
+    print(f"Edit Mode, {obj.name} ({len(obj.data.vertices)} vertices), GERBS r=2 rest=bound, "
+          f"{max(repeats, 7)} rounds (medians; pair: median of with / without per round)")
+    for name in cases:
+        on, off = (statistics.median(rows[name, x]) for x in (True, False))
+        pair = statistics.median(a / b for a, b in zip(rows[name, True], rows[name, False]))
+        print(f"  {name:<28} with {on * 1e3:8.2f} ms  without {off * 1e3:8.2f} ms  "
+              f"pair {pair:6.2f}x", flush=True)
 
 
 if __name__ == "__main__":

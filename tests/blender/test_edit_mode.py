@@ -1,0 +1,121 @@
+"""Edit Mode updates: a selection change costs no sync work, a position edit goes through
+the stencil's partial update and gives the surface a fresh build gives, also through a
+modifier after GERBS."""
+import bmesh
+import bpy
+import numpy as np
+import pytest
+
+from .helpers import base_positions, evaluated, make_object, topology
+
+pytestmark = pytest.mark.blender
+
+R = 2
+
+
+class _Counter:
+    """Counts the calls of a function of the add-on (it still runs)."""
+
+    def __init__(self, monkeypatch, module, name):
+        self.calls = 0
+        inner = getattr(module, name)
+
+        def counted(*args, **kwargs):
+            self.calls += 1
+            return inner(*args, **kwargs)
+
+        monkeypatch.setattr(module, name, counted)
+
+
+def _edit(kind="icosphere", rest="bound", after=None):
+    from blender_addon import api
+
+    obj = make_object(kind)
+    mod = api.add_surface(obj, resolution=R, rest=rest)
+    if after is not None:
+        extra = obj.modifiers.new("after", after)
+        extra.show_in_editmode = True
+        if after == "DISPLACE":
+            extra.direction, extra.strength = "Z", 0.3  # no texture: every point up 0.15
+    X = base_positions(obj)
+    P0 = evaluated(obj)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bm = bmesh.from_edit_mesh(obj.data)
+    bm.verts.ensure_lookup_table()
+    return obj, mod, bm, X, P0
+
+
+def _update(obj):
+    bmesh.update_edit_mesh(obj.data, loop_triangles=False, destructive=False)
+    return evaluated(obj)
+
+
+def _statuses():
+    from blender_addon import engine
+    return dict(engine.stats)
+
+
+def test_selection_changes_do_no_sync_work(blender, monkeypatch):
+    from blender_addon import geometry_nodes as gn
+    from blender_addon import ids, snapshot
+
+    obj, mod, bm, X, P0 = _edit()
+    reads = _Counter(monkeypatch, snapshot, "read_snapshot")
+    before = _statuses()
+    # what the select operators do (ID_RECALC_SELECT: a shading-only update): no sync
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.select_all(action="DESELECT")
+    assert np.array_equal(evaluated(obj), P0)
+    assert _statuses() == before
+    # a script's selection change tags the geometry: one sync, "unchanged", and the
+    # result's record is not read back (the state wrote it: the stamp says so)
+    bm.verts[5].select_set(True)
+    assert np.array_equal(_update(obj), P0)
+    after = _statuses()
+    assert after.get("unchanged", 0) == before.get("unchanged", 0) + 1
+    assert {k: v for k, v in after.items() if k != "unchanged"} == \
+        {k: v for k, v in before.items() if k != "unchanged"}
+    assert reads.calls == 0
+    # control: a record the state did not write (as after an undo) is read back
+    gn.get_result(mod).data[ids.RECORD_STAMP] = "restored by undo"
+    bm.verts[5].select_set(False)
+    assert np.array_equal(_update(obj), P0)
+    assert reads.calls == 1
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def _expected(obj, X_rest, X_new, shift=0.0):
+    """The surface a fresh build of the moved mesh bound to the rest shape gives."""
+    from gerbs_core import BlendingSurface
+    from blender_addon.mesh_io import faces_from_csr
+
+    offsets, corners = topology(obj.data)
+    P = BlendingSurface(X_new, faces_from_csr(offsets, corners),
+                        rest_positions=X_rest).tessellate(R)[0]
+    return P + np.array([0.0, 0.0, shift])
+
+
+@pytest.mark.parametrize("after", [None, "DISPLACE", "TRIANGULATE"])
+def test_moved_vertices_update_like_a_fresh_build(blender, after):
+    """One vertex moved twice in Edit Mode (Rest Shape Bound): partial updates of the
+    stencil, no rebuild, and the surface of a fresh build each time; with a deform-only
+    modifier after GERBS (Displace: read through the channel) and with one that changes
+    the mesh (Triangulate: read from the edit mesh)."""
+    from blender_addon import engine
+
+    obj, mod, bm, X, P0 = _edit(after=after)
+    shift = 0.15 if after == "DISPLACE" else 0.0
+    # an icosphere is all triangles: Triangulate keeps the surface's points as they are
+    assert np.abs(P0 - _expected(obj, X, X, shift)).max() <= 1e-5
+    rebuilt = _statuses().get("rebuilt", 0)
+    X_new = X.copy()
+    for step, dz in enumerate((0.2, -0.07)):
+        bm.verts[3].co.z += dz
+        X_new[3, 2] = bm.verts[3].co.z
+        P = _update(obj)
+        assert np.abs(P - _expected(obj, X, X_new, shift)).max() <= 1e-5
+        st = engine.get_state(obj, mod)
+        assert st.partial_updates == step + 1  # only the moved vertex's columns
+    assert np.abs(P - P0).max() > 0.05
+    assert _statuses().get("rebuilt", 0) == rebuilt
+    bpy.ops.object.mode_set(mode="OBJECT")
