@@ -97,11 +97,16 @@ class Stencil:
         Bc, Ec = self._csc
         moved = np.asarray(moved, dtype=np.int64)
         dB = Bc[:, moved]
-        dc = self.fits.columns(moved) @ delta           # (V M, k) coefficient changes
-        rows = np.flatnonzero(np.any(dc != 0, axis=1))
+        # coefficient changes on the rows the moved columns touch only: a dense (V M, k)
+        # product would cost the whole mesh on every drag step
+        C = self.fits.columns(moved).tocsr()
+        rows = np.flatnonzero(np.diff(C.indptr))
+        dc = C[rows] @ delta
+        keep = np.any(dc != 0, axis=1)
+        rows, dc = rows[keep], dc[keep]
         dE = Ec[:, rows]
         _scatter_add(points, dB.tocoo(), delta)
-        _scatter_add(points, dE.tocoo(), dc[rows])
+        _scatter_add(points, dE.tocoo(), dc)
 
     def matrix(self) -> sp.csr_matrix:
         """The explicit W = B + E A (P, V) -- for tests and small meshes; it holds many
