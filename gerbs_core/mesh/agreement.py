@@ -18,8 +18,13 @@ Cylinder's rims) and vanishes on smooth meshes, whose convergence it would spoil
 
 1. *choice*: every vertex takes the candidate data fit (degree 2..4, one or two
    rings, :data:`gerbs_core.mesh.fits.CANDIDATES`) of least MU * A + LAMBDA * tension
-   given its neighbours' choices (``CHOICE_ROUNDS`` simultaneous rounds, ties to the
-   lower degree): degree 4 where a mesh is fine and regular, 2 where it is coarse;
+   + FOLD * fold penalty given its neighbours' choices (``CHOICE_ROUNDS`` simultaneous
+   rounds, ties to the lower degree): degree 4 where a mesh is fine and regular, 2
+   where it is coarse. The fold penalty sum_p h_v^2 w Psi_v max(0, FOLD_COS - n_l . n_f)^2
+   (n_l the candidate's unit normal at p, n_f the rest normal of p's face) charges a
+   candidate that turns by more than arccos(FOLD_COS) against the face it is blended
+   over -- a fold of the local function itself, which the agreement cannot see where
+   one Psi dominates. It is zero on smooth meshes and depends on the rest shape only;
 2. *coupling* (:mod:`gerbs_core.mesh.coupling`): ``SWEEPS`` damped block-Jacobi sweeps
    of data + MU * A + LAMBDA * tension, pinned (l_v(0) = X_v), starting from the chosen fits. Every sweep is a
    linear map of the previous coefficients, so the result is linear in the positions
@@ -27,9 +32,9 @@ Cylinder's rims) and vanishes on smooth meshes, whose convergence it would spoil
    SWEEPS) rings of v.
 
 Measured (bench_shape, docs/design.md): against the plain degree-2 fits, Suzanne's
-adjacent output pairs above 60 / 90 degrees drop from 142 / 48 to ~80 / 20, the
-icosphere's curvature error 3-5x and the torus's 8x, with the Cube and Cylinder
-inside the acceptance boxes.
+adjacent output pairs above 60 / 90 degrees drop from 142 / 48 to 74 / 16 (90 / 26
+without the fold penalty), the icosphere's curvature error 3-5x and the torus's 8x,
+with the Cube and Cylinder inside the acceptance boxes.
 """
 from __future__ import annotations
 
@@ -196,7 +201,7 @@ def _rows_apply(B, vertex, coef):
     """sum_m B[s, m] coef[vertex[s] M + m] (SC, 3) for per-row monomial values B (SC, M) and
     coefficients coef (V M, 3): one sparse product (no (SC, M, 3) temporaries)."""
     SC, M = B.shape
-    rows = sp.csr_matrix((B.ravel(), (vertex[:, None] * M + np.arange(M)).ravel(),
+    rows = sp.csr_matrix((np.ascontiguousarray(B).ravel(), (vertex[:, None] * M + np.arange(M)).ravel(),
                           np.arange(0, SC * M + 1, M)), shape=(SC, coef.shape[0]))
     return rows @ coef
 
@@ -220,13 +225,14 @@ def _fold_penalty(cands, X, smp, fn, h, rule):
     if not rule.fold:
         return out
     nf = fn[smp.face]
+    SC = len(smp.vertex)
     dm = monomials(smp.y, max(c.degree for c in cands), 1)[1]     # (SC, M, 2)
+    dm = np.concatenate([dm[..., 0], dm[..., 1]])                   # (2 SC, M): d/dy1, d/dy2
+    vv = np.concatenate([smp.vertex, smp.vertex])
     for i, c in enumerate(cands):
         M = n_monomials(c.degree)
-        coef = (c.matrix @ X).reshape(-1, 3)
-        d1, d2 = (_rows_apply(np.ascontiguousarray(dm[:, :M, j]), smp.vertex, coef)
-                  for j in (0, 1))
-        n = np.cross(d1, d2)
+        d = _rows_apply(dm[:, :M], vv, (c.matrix @ X).reshape(-1, 3))
+        n = np.cross(d[:SC], d[SC:])
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
         out[:, i] = np.maximum(0.0, rule.fold_cos - np.einsum("ij,ij->i", n, nf)) ** 2
     return (rule.fold * h[smp.vertex] ** 2 * smp.weight * smp.psi)[:, None] * out

@@ -35,6 +35,7 @@ VARIANTS = {
     "choice-only": {"fairness": gerbs_core.FairnessRule(sweeps=0)},
     "no-tension": {"fairness": gerbs_core.FairnessRule(lam=0.0)},
     "fixed-degree-2": {"fairness": gerbs_core.FairnessRule(candidates=((2, 1),))},
+    "no-fold": {"fairness": gerbs_core.FairnessRule(fold=0.0)},
 }
 
 
