@@ -33,7 +33,8 @@ Cylinder's rims) and vanishes on smooth meshes, whose convergence it would spoil
 
 Measured (bench_shape, docs/design.md): against the plain degree-2 fits, Suzanne's
 adjacent output pairs above 60 / 90 degrees drop from 142 / 48 to 82 / 12 (the former
-rule, without the fold penalty and with energies at lattice resolution 4: 90 / 26), the icosphere's curvature error 3-5x and the torus's 8x,
+rule, without the fold penalty and with energies at lattice resolution 4: 90 / 26),
+the icosphere's curvature error 3-5x and the torus's 8x,
 with the Cube and Cylinder inside the acceptance boxes.
 """
 from __future__ import annotations
@@ -204,8 +205,9 @@ def _rows_apply(B, vertex, coef):
     """sum_m B[s, m] coef[vertex[s] M + m] (SC, 3) for per-row monomial values B (SC, M) and
     coefficients coef (V M, 3): one sparse product (no (SC, M, 3) temporaries)."""
     SC, M = B.shape
-    rows = sp.csr_matrix((np.ascontiguousarray(B).ravel(), (vertex[:, None] * M + np.arange(M)).ravel(),
-                          np.arange(0, SC * M + 1, M)), shape=(SC, coef.shape[0]))
+    cols = (vertex[:, None] * M + np.arange(M)).ravel()
+    rows = sp.csr_matrix((np.ascontiguousarray(B).ravel(), cols, np.arange(0, SC * M + 1, M)),
+                         shape=(SC, coef.shape[0]))
     return rows @ coef
 
 

@@ -49,9 +49,11 @@ def star_stats(topo, X):
     return val, hi / lo
 
 
-def vertex_agreement(s, resolution=4):
-    """(V,) every vertex's agreement energy over its rows / h_v^2 (module docstring)."""
-    from gerbs_core.mesh.agreement import _samples, face_sharpness
+def vertex_agreement(s, resolution=None):
+    """(V,) every vertex's agreement energy over its rows / h_v^2 (module docstring), on the
+    energies' sample lattice (default: the default rule's resolution)."""
+    from gerbs_core.mesh.agreement import FairnessRule, _samples, face_sharpness
+    resolution = FairnessRule().resolution if resolution is None else resolution
     from gerbs_core.mesh.rings import data_rings
     m = s.model
     topo, corners = m.topology, s.layouts.corners
@@ -63,9 +65,9 @@ def vertex_agreement(s, resolution=4):
     l = s.vertices[smp.vertex] + np.einsum("rm,rmk->rk", smp.Bu[:, :M], coef[smp.vertex])
     S = np.stack([np.bincount(smp.sample, smp.psi * l[:, k], minlength=smp.n_samples)
                   for k in range(3)], 1)
+    # rows with Psi = 1 were dropped (there every other Psi is 0 and the energy 0): the
+    # mean over the live rows of a sample, weighted by their Psi
     Pt = np.bincount(smp.sample, smp.psi, minlength=smp.n_samples)
-    # rows with Psi = 1 were dropped: there S = l_v; add the dropped weight back
-    S = S + (1.0 - Pt)[:, None] * 0.0
     e = smp.psi * ((l - S[smp.sample] / np.maximum(Pt, 1e-300)[smp.sample, None]) ** 2).sum(1)
     E = np.bincount(smp.vertex, e * smp.weight, minlength=topo.n_vertices)
     return E / rings.h ** 2
@@ -108,14 +110,17 @@ def report(s, r, threshold, top):
     rank = np.argsort(-E)
     pos = np.empty_like(rank)
     pos[rank] = np.arange(len(E))
-    print("vertex | pairs | largest | faces | dist/edge | valence | aniso | degree | E | E rank | deg of face corners")
+    print("vertex | pairs | largest | faces | dist/edge | valence | aniso | degree | E | E rank | "
+          "(corner, degree, aniso) of the faces")
     for v, lst in sorted(byv.items(), key=lambda kv: -len(kv[1]))[:top]:
         fs = sorted({x[1] for x in lst} | {x[3] for x in lst})
-        corners = sorted(set(np.concatenate(
-            [topo.face_vertices[topo.face_offsets[f]:topo.face_offsets[f + 1]] for f in fs]).tolist()))
+        corners = sorted(set(np.concatenate([topo.face_vertices[topo.face_offsets[f]:
+                                                                topo.face_offsets[f + 1]]
+                                             for f in fs]).tolist()))
+        info = [(c, int(s.degrees[c]), round(float(an[c]), 1)) for c in corners]
         print(f"{v} | {len(lst)} | {max(x[0] for x in lst):.0f} | {fs} | "
               f"{np.mean([x[2] for x in lst]):.2f} | {val[v]} | {an[v]:.1f} | {s.degrees[v]} | "
-              f"{E[v]:.3g} | {pos[v]} | {[(c, int(s.degrees[c]), round(float(an[c]), 1)) for c in corners]}")
+              f"{E[v]:.3g} | {pos[v]} | {info}")
     return sites, E
 
 
