@@ -18,8 +18,13 @@ Cylinder's rims) and vanishes on smooth meshes, whose convergence it would spoil
 
 1. *choice*: every vertex takes the candidate data fit (degree 2..4, one or two
    rings, :data:`gerbs_core.mesh.fits.CANDIDATES`) of least MU * A + LAMBDA * tension
-   given its neighbours' choices (``CHOICE_ROUNDS`` simultaneous rounds, ties to the
-   lower degree): degree 4 where a mesh is fine and regular, 2 where it is coarse;
+   + FOLD * fold penalty given its neighbours' choices (``CHOICE_ROUNDS`` simultaneous
+   rounds, ties to the lower degree): degree 4 where a mesh is fine and regular, 2
+   where it is coarse. The fold penalty sum_p h_v^2 w Psi_v max(0, FOLD_COS - n_l . n_f)^2
+   (n_l the candidate's unit normal at p, n_f the rest normal of p's face) charges a
+   candidate that turns by more than arccos(FOLD_COS) against the face it is blended
+   over -- a fold of the local function itself, which the agreement cannot see where
+   one Psi dominates. It is zero on smooth meshes and depends on the rest shape only;
 2. *coupling* (:mod:`gerbs_core.mesh.coupling`): ``SWEEPS`` damped block-Jacobi sweeps
    of data + MU * A + LAMBDA * tension, pinned (l_v(0) = X_v), starting from the chosen fits. Every sweep is a
    linear map of the previous coefficients, so the result is linear in the positions
@@ -27,9 +32,10 @@ Cylinder's rims) and vanishes on smooth meshes, whose convergence it would spoil
    SWEEPS) rings of v.
 
 Measured (bench_shape, docs/design.md): against the plain degree-2 fits, Suzanne's
-adjacent output pairs above 60 / 90 degrees drop from 142 / 48 to ~80 / 20, the
-icosphere's curvature error 3-5x and the torus's 8x, with the Cube and Cylinder
-inside the acceptance boxes.
+adjacent output pairs above 60 / 90 degrees drop from 142 / 48 to 82 / 12 (the former
+rule, without the fold penalty and with energies at lattice resolution 4: 90 / 26),
+the icosphere's curvature error 3-5x and the torus's 8x,
+with the Cube and Cylinder inside the acceptance boxes.
 """
 from __future__ import annotations
 
@@ -44,7 +50,7 @@ from .coupling import coupled_fits, identity_fits
 from .fits import CANDIDATES, candidate_fits_all
 from .monomials import monomial_exponents, monomials, n_monomials
 
-__all__ = ["FairnessRule", "DMAX", "fair_fits", "face_sharpness"]
+__all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
 
 DMAX = 4                      # the highest degree of a local function
 MMAX = n_monomials(DMAX)      # coefficients per vertex in the padded layout
@@ -56,26 +62,35 @@ class FairnessRule:
 
     mu: weight of the agreement energy against the data (both per unit of their sums);
     lam: weight of the tension on fully sharp faces; sharp_from / sharp_to (degrees):
-    the normal angle where faces start / end being sharp; sweeps; damping in (0, 1];
-    choice_rounds; resolution of the sample lattice of the energies.
+    the normal angle where faces start / end being sharp; fold: weight of the fold
+    penalty of the choice (0: off), fold_cos: the cosine below which a candidate's normal
+    counts as turned against its face's; sweeps; damping in (0, 1]; choice_rounds;
+    resolution of the sample lattice of the energies.
     """
 
     mu: float = 300.0
     lam: float = 75.0
     sharp_from: float = 50.0
     sharp_to: float = 80.0
+    fold: float = 1000.0
+    fold_cos: float = 0.3
     sweeps: int = 2
     damping: float = 0.7
     choice_rounds: int = 3
-    resolution: int = 4
+    # 3, not 4: measured (bench_shape) cow pairs above 90 degrees 116 -> 89, Suzanne 16 -> 12,
+    # tori 1.1-1.5x smaller curvature errors, the Cylinder's r16/r8 dihedral 0.71 -> 0.58;
+    # Suzanne above 60 degrees 74 -> 82, the Cone's largest dihedral at r = 8 39 -> 56
+    resolution: int = 3
     candidates: tuple = CANDIDATES
 
     def __post_init__(self):
         from ..errors import InvalidParameterError
-        for name in ("mu", "lam"):
+        for name in ("mu", "lam", "fold"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
                 raise InvalidParameterError(name, f"must be finite and >= 0, got {v!r}")
+        if not (np.isfinite(self.fold_cos) and -1 <= self.fold_cos <= 1):
+            raise InvalidParameterError("fold_cos", f"must be in [-1, 1], got {self.fold_cos!r}")
         if not (0 <= self.sharp_from < self.sharp_to <= 180):
             raise InvalidParameterError("sharp_from", "need 0 <= sharp_from < sharp_to <= 180")
         if not (0 < self.damping <= 1):
@@ -87,13 +102,19 @@ class FairnessRule:
             raise InvalidParameterError("resolution", "must be an integer >= 2")
 
 
-def face_sharpness(topo, X, sharp_from: float, sharp_to: float) -> np.ndarray:
-    """s_f (F,) in [0, 1]: smoothstep of the largest angle (degrees) between face f's normal
-    and its edge neighbours' normals (rest shape), from sharp_from to sharp_to."""
+def face_normals(topo, X) -> np.ndarray:
+    """Unit normals (F, 3) of the faces at positions X (V, 3): the normalised vector area
+    sum_k x_k x x_{k+1} (a non-planar face's mean orientation)."""
     fv, nx, cf = topo.face_vertices, topo.corner_next, topo.corner_face
     fn = np.zeros((topo.n_faces, 3))
     np.add.at(fn, cf, np.cross(X[fv], X[fv[nx]]))
-    fn /= np.linalg.norm(fn, axis=1, keepdims=True)
+    return fn / np.linalg.norm(fn, axis=1, keepdims=True)
+
+
+def face_sharpness(topo, X, sharp_from: float, sharp_to: float) -> np.ndarray:
+    """s_f (F,) in [0, 1]: smoothstep of the largest angle (degrees) between face f's normal
+    and its edge neighbours' normals (rest shape), from sharp_from to sharp_to."""
+    fn = face_normals(topo, X)
     ef = topo.edge_faces
     two = ef[:, 1] >= 0
     ang = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", fn[ef[two, 0]], fn[ef[two, 1]]),
@@ -108,10 +129,13 @@ def face_sharpness(topo, X, sharp_from: float, sharp_to: float) -> np.ndarray:
 @dataclass(frozen=True)
 class _Samples:
     """The energies' sample-corner pairs (SC rows): sample p, vertex v, Psi, sharpness s,
-    unscaled monomials Bu (SC, MMAX) and scaled Bs = Bu * h_v^-|m|; cage weights."""
+    unscaled monomials Bu (SC, MMAX) and scaled Bs = Bu * h_v^-|m|; cage weights; the
+    rows' chart positions y (SC, 2) and faces."""
 
     sample: np.ndarray
     vertex: np.ndarray
+    y: np.ndarray
+    face: np.ndarray
     psi: np.ndarray
     sharp: np.ndarray
     Bu: np.ndarray
@@ -174,32 +198,61 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     # every face weighs the same, whatever its size (measured: weighting by area made
     # Suzanne's small faces count too little, 236 pairs above 60 degrees against 126)
     weight = 1.0 / counts[face]
-    return _Samples(sample, vertex, psi, sharp_face[face], Bu, Bs, weight, cage, L)
+    return _Samples(sample, vertex, y, face, psi, sharp_face[face], Bu, Bs, weight, cage, L)
+
+
+def _rows_apply(B, vertex, coef):
+    """sum_m B[s, m] coef[vertex[s] M + m] (SC, 3) for per-row monomial values B (SC, M) and
+    coefficients coef (V M, 3): one sparse product (no (SC, M, 3) temporaries)."""
+    SC, M = B.shape
+    cols = (vertex[:, None] * M + np.arange(M)).ravel()
+    rows = sp.csr_matrix((np.ascontiguousarray(B).ravel(), cols, np.arange(0, SC * M + 1, M)),
+                         shape=(SC, coef.shape[0]))
+    return rows @ coef
 
 
 def _candidate_values(cands, X, vertex, Bu):
-    """Values (SC, ncand, 3) of every candidate local function at the sample corners (one
-    sparse product per candidate: no (SC, M, 3) temporaries)."""
-    SC = len(vertex)
-    out = np.empty((SC, len(cands), 3))
+    """Values (SC, ncand, 3) of every candidate local function at the sample corners."""
+    out = np.empty((len(vertex), len(cands), 3))
     Xs = X[vertex]
     for i, c in enumerate(cands):
         M = n_monomials(c.degree)
-        coef = (c.matrix @ X).reshape(-1, 3)                   # (V M, 3)
-        rows = sp.csr_matrix((Bu[:, :M].ravel(), (vertex[:, None] * M + np.arange(M)).ravel(),
-                              np.arange(0, SC * M + 1, M)), shape=(SC, coef.shape[0]))
-        out[:, i] = Xs + rows @ coef
+        out[:, i] = Xs + _rows_apply(Bu[:, :M], vertex, (c.matrix @ X).reshape(-1, 3))
     return out
 
 
-def _choose(cands, X, smp, rule, V):
-    """The candidate of every vertex (V,): least mu * agreement + lam * tension (rest shape)."""
+def _fold_penalty(cands, X, smp, fn, h, rule):
+    """(SC, ncand): fold h_v^2 w P max(0, fold_cos - cos(n_l(p), n_f))^2 per row and
+    candidate, n_l the candidate's normal at the row's chart point, n_f its face's rest
+    normal: it is zero unless the local function turns by more than arccos(fold_cos)
+    against the face it is blended over (a fold of the local function itself)."""
+    out = np.zeros((len(smp.vertex), len(cands)))
+    if not rule.fold:
+        return out
+    nf = fn[smp.face]
+    SC = len(smp.vertex)
+    dm = monomials(smp.y, max(c.degree for c in cands), 1)[1]     # (SC, M, 2)
+    dm = np.concatenate([dm[..., 0], dm[..., 1]])                   # (2 SC, M): d/dy1, d/dy2
+    vv = np.concatenate([smp.vertex, smp.vertex])
+    for i, c in enumerate(cands):
+        M = n_monomials(c.degree)
+        d = _rows_apply(dm[:, :M], vv, (c.matrix @ X).reshape(-1, 3))
+        n = np.cross(d[:SC], d[SC:])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        out[:, i] = np.maximum(0.0, rule.fold_cos - np.einsum("ij,ij->i", n, nf)) ** 2
+    return (rule.fold * h[smp.vertex] ** 2 * smp.weight * smp.psi)[:, None] * out
+
+
+def _choose(cands, X, smp, rule, V, penalty):
+    """The candidate of every vertex (V,): least mu * agreement + lam * tension + the fold
+    ``penalty`` (SC, ncand) (rest shape)."""
     vals = _candidate_values(cands, X, smp.vertex, smp.Bu)
     cage = (smp.cage @ X)[smp.sample]
     # per sample, not per face (unlike the coupling): measured Suzanne 126 pairs above
     # 60 degrees against 156 with the per-face weights
     P = smp.psi
     tension = rule.lam * (smp.sharp * P)[:, None] * ((vals - cage[:, None]) ** 2).sum(-1)
+    tension += penalty
     one = 1.0 - P
     # agreement of row s: P / (1 - P) |(1 - P) l - (T - P l_cur)|^2 (0 where P = 1)
     scale = np.where(one > 1e-12, P / np.where(one > 1e-12, one, 1.0), 0.0)
@@ -249,7 +302,11 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
     if sharp is None:
         sharp = face_sharpness(topo, X, rule.sharp_from, rule.sharp_to)
     smp = _samples(topo, charts, corners2d, cover, rings.h, rule.resolution, sharp)
-    choice = _choose(cands, X, smp, rule, V) if len(cands) > 1 else np.zeros(V, np.int64)
+    if len(cands) > 1:
+        penalty = _fold_penalty(cands, X, smp, face_normals(topo, X), rings.h, rule)
+        choice = _choose(cands, X, smp, rule, V, penalty)
+    else:
+        choice = np.zeros(V, np.int64)
     degrees = np.array([c.degree for c in cands])[choice]
     chosen = _chosen(cands, choice, "matrix", V)
     normals = np.zeros((V, MMAX, MMAX))

@@ -35,6 +35,11 @@ VARIANTS = {
     "choice-only": {"fairness": gerbs_core.FairnessRule(sweeps=0)},
     "no-tension": {"fairness": gerbs_core.FairnessRule(lam=0.0)},
     "fixed-degree-2": {"fairness": gerbs_core.FairnessRule(candidates=((2, 1),))},
+    "no-fold": {"fairness": gerbs_core.FairnessRule(fold=0.0)},
+    # the default before the fold penalty and the resolution-3 energies (2026-12-01)
+    "former": {"fairness": gerbs_core.FairnessRule(fold=0.0, resolution=4)},
+    "energy-res-3": {"fairness": gerbs_core.FairnessRule(resolution=3)},
+    "energy-res-5": {"fairness": gerbs_core.FairnessRule(resolution=5)},
 }
 
 

@@ -1,0 +1,140 @@
+"""Where a GERBS surface folds: the output pairs above a dihedral threshold, by cage face
+and nearest vertex, with the star's valence, anisotropy and agreement energy.
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/shape/folds.py [suzanne|cow|file.obj]
+        [--resolution 8] [--threshold 90] [--top 15]
+
+A diagnostic for the fair-shape rule (gerbs_core.mesh.agreement), not a benchmark:
+``fold_sites(surface, r, t)`` is importable; ``vertex_agreement(surface)`` gives each
+vertex's share of the agreement energy sum_p sum_k Psi_k |l_k(p) - S(p)|^2 (which
+equals the pairwise sum_{k<j} Psi_k Psi_j |l_k - l_j|^2 at every sample) over its own
+rows, divided by h_v^2 (the star's mean ring-1 distance) so that it is scale-free.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+
+import numpy as np  # noqa: E402
+
+from gerbs_core.testing import dihedral_angles, edge_adjacency  # noqa: E402
+
+
+def load(name: str):
+    """(V, F) of suzanne, cow (MeshLab's sample) or an OBJ file."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+    from shape.inputs import REAL, load_real
+    if name in REAL:
+        return load_real(name, [])
+    from gerbs_core.datasets.obj import read_obj
+    V, F = read_obj(name)
+    return np.asarray(V, dtype=np.float64), F
+
+
+def star_stats(topo, X):
+    """(valence (V,), anisotropy (V,): longest / shortest edge at the vertex)."""
+    e = np.asarray(topo.edges)
+    ln = np.linalg.norm(X[e[:, 0]] - X[e[:, 1]], axis=1)
+    V = len(X)
+    lo, hi = np.full(V, np.inf), np.zeros(V)
+    for k in (0, 1):
+        np.minimum.at(lo, e[:, k], ln)
+        np.maximum.at(hi, e[:, k], ln)
+    val = np.bincount(e.ravel(), minlength=V)
+    return val, hi / lo
+
+
+def vertex_agreement(s, resolution=None):
+    """(V,) every vertex's agreement energy over its rows / h_v^2 (module docstring), on the
+    energies' sample lattice (default: the default rule's resolution)."""
+    from gerbs_core.mesh.agreement import FairnessRule, _samples, face_sharpness
+    resolution = FairnessRule().resolution if resolution is None else resolution
+    from gerbs_core.mesh.rings import data_rings
+    m = s.model
+    topo, corners = m.topology, s.layouts.corners
+    rings = data_rings(topo, m.charts, corners)
+    sharp = face_sharpness(topo, s.vertices, 50.0, 80.0)
+    smp = _samples(topo, m.charts, corners, m.cover, rings.h, resolution, sharp)
+    coef = s.coefficients.reshape(topo.n_vertices, -1, 3)
+    M = coef.shape[1]
+    l = s.vertices[smp.vertex] + np.einsum("rm,rmk->rk", smp.Bu[:, :M], coef[smp.vertex])
+    S = np.stack([np.bincount(smp.sample, smp.psi * l[:, k], minlength=smp.n_samples)
+                  for k in range(3)], 1)
+    # rows with Psi = 1 were dropped (there every other Psi is 0 and the energy 0): the
+    # mean over the live rows of a sample, weighted by their Psi
+    Pt = np.bincount(smp.sample, smp.psi, minlength=smp.n_samples)
+    e = smp.psi * ((l - S[smp.sample] / np.maximum(Pt, 1e-300)[smp.sample, None]) ** 2).sum(1)
+    E = np.bincount(smp.vertex, e * smp.weight, minlength=topo.n_vertices)
+    return E / rings.h ** 2
+
+
+def fold_sites(s, r=8, threshold=90.0):
+    """Output pairs above ``threshold`` degrees: list of (angle, face, nearest face corner
+    vertex, distance to it / the face's mean edge)."""
+    lat = s.lattice(r)
+    P, T, _ = s.tessellate(r)
+    T = np.asarray(T)
+    adj = edge_adjacency(T)
+    ang = dihedral_angles(P, T, adj)
+    tf = np.asarray(lat.triangle_face)
+    topo = s.topology
+    out = []
+    for k in np.flatnonzero(ang > threshold):
+        i, j = adj["pairs"][k]
+        mid = P[adj["pair_edges"][k]].mean(0)
+        f = tf[i]
+        vs = topo.face_vertices[topo.face_offsets[f]:topo.face_offsets[f + 1]]
+        d = np.linalg.norm(s.vertices[vs] - mid, axis=1)
+        el = np.linalg.norm(s.vertices[vs] - s.vertices[np.roll(vs, -1)], axis=1).mean()
+        out.append((float(ang[k]), int(f), int(vs[np.argmin(d)]), float(d.min() / el),
+                    int(tf[j])))
+    return out
+
+
+def report(s, r, threshold, top):
+    sites = fold_sites(s, r, threshold)
+    topo = s.topology
+    val, an = star_stats(topo, s.vertices)
+    E = vertex_agreement(s)
+    print(f"{len(sites)} pairs above {threshold} deg; vertices: median agreement "
+          f"{np.median(E):.3g}, 95% {np.percentile(E, 95):.3g}; median anisotropy "
+          f"{np.median(an):.2f}")
+    byv = {}
+    for a, f, v, d, f2 in sites:
+        byv.setdefault(v, []).append((a, f, d, f2))
+    rank = np.argsort(-E)
+    pos = np.empty_like(rank)
+    pos[rank] = np.arange(len(E))
+    print("vertex | pairs | largest | faces | dist/edge | valence | aniso | degree | E | E rank | "
+          "(corner, degree, aniso) of the faces")
+    for v, lst in sorted(byv.items(), key=lambda kv: -len(kv[1]))[:top]:
+        fs = sorted({x[1] for x in lst} | {x[3] for x in lst})
+        corners = sorted(set(np.concatenate([topo.face_vertices[topo.face_offsets[f]:
+                                                                topo.face_offsets[f + 1]]
+                                             for f in fs]).tolist()))
+        info = [(c, int(s.degrees[c]), round(float(an[c]), 1)) for c in corners]
+        print(f"{v} | {len(lst)} | {max(x[0] for x in lst):.0f} | {fs} | "
+              f"{np.mean([x[2] for x in lst]):.2f} | {val[v]} | {an[v]:.1f} | {s.degrees[v]} | "
+              f"{E[v]:.3g} | {pos[v]} | {info}")
+    return sites, E
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("mesh", nargs="?", default="suzanne")
+    ap.add_argument("--resolution", type=int, default=8)
+    ap.add_argument("--threshold", type=float, default=90.0)
+    ap.add_argument("--top", type=int, default=15)
+    a = ap.parse_args()
+    from gerbs_core import BlendingSurface
+    V, F = load(a.mesh)
+    report(BlendingSurface(V, F), a.resolution, a.threshold, a.top)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,68 @@
+"""Prototype: stronger (or weaker) coupling on the faces of vertices whose cage star spreads
+(largest angle between a star face's normal and the vertex's mean normal) above
+``spread`` degrees: their rows' weights times ``beta`` in the coupling sweeps."""
+import dataclasses
+import sys
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[3]))
+import gerbs_core.mesh.agreement as ag  # noqa: E402
+import gerbs_core.mesh.coupling as cp  # noqa: E402
+
+OPTS = {"beta": 3.0, "spread": 60.0, "topo": None, "X": None, "rows": "face"}
+
+
+def star_spread(topo, X):
+    fn = ag.face_normals(topo, X)
+    cf, fv = topo.corner_face, topo.face_vertices
+    vn = np.zeros((topo.n_vertices, 3))
+    np.add.at(vn, fv, fn[cf])
+    vn /= np.linalg.norm(vn, axis=1, keepdims=True)
+    ang = np.degrees(np.arccos(np.clip((vn[fv] * fn[cf]).sum(1), -1, 1)))
+    out = np.zeros(topo.n_vertices)
+    np.maximum.at(out, fv, ang)
+    return out
+
+
+def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None, _old=cp.coupled_fits):
+    topo, X = OPTS["topo"], OPTS["X"]
+    spiky = star_spread(topo, X) > OPTS["spread"]
+    if OPTS["rows"] == "face":
+        face_hit = np.zeros(topo.n_faces, bool)
+        face_hit[topo.corner_face[spiky[topo.face_vertices]]] = True
+        hit = face_hit[smp.face]
+    else:
+        hit = spiky[smp.vertex]
+    smp = dataclasses.replace(smp, weight=smp.weight * np.where(hit, OPTS["beta"], 1.0))
+    return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints)
+
+
+def fair_fits(topo, charts, corners2d, cover, rings, X, rule, sharp=None, constraints=None,
+              _old=ag.fair_fits):
+    OPTS["topo"], OPTS["X"] = topo, X
+    return _old(topo, charts, corners2d, cover, rings, X, rule, sharp, constraints)
+
+
+@contextmanager
+def patched(**opts):
+    import gerbs_core.mesh.surface as su
+    old_ff, old_cf, oldo = su.fair_fits, ag.coupled_fits, dict(OPTS)
+    OPTS.update(opts)
+    su.fair_fits, ag.coupled_fits = fair_fits, coupled
+    try:
+        yield
+    finally:
+        su.fair_fits, ag.coupled_fits = old_ff, old_cf
+        OPTS.clear()
+        OPTS.update(oldo)
+
+
+def variant(V, F, r, exact=True, **opts):
+    """bench_shape prototype variant: the default surface with this module's change."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+    from shape import methods
+    with patched(**opts):
+        return methods.gerbs_samples(V, F, r, exact=exact)
