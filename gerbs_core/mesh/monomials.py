@@ -27,8 +27,12 @@ def monomial_exponents(degree: int) -> np.ndarray:
     return _exponents(int(degree))
 
 
-def n_monomials(degree: int) -> int:
-    """M = degree (degree + 3) / 2, the number of monomials of degree 1..degree."""
+def n_monomials(degree):
+    """M = degree (degree + 3) / 2, the number of monomials of degree 1..degree (an int,
+    or an int array for an array of degrees)."""
+    if np.ndim(degree):
+        d = np.asarray(degree, dtype=np.int64)
+        return d * (d + 3) // 2
     return int(degree) * (int(degree) + 3) // 2
 
 
