@@ -77,28 +77,32 @@ def _partition(psi, terms, n_samples, n_max):
 
 def _write_mono(data_e, cols_e, e0, y, w, vertex, Mt):
     """E's entries of the terms (their values Psi mono_m and columns u M + m), term after
-    term from e0: a strided view per monomial when all terms share one degree, else
-    one scatter per degree."""
+    term from e0: strided views of the output when all terms share one degree, else
+    one scatter per degree and monomial."""
     T = len(w)
     ptr = np.zeros(T + 1, dtype=np.int64)
     np.cumsum(Mt, out=ptr[1:])
+    y0, y1 = np.ascontiguousarray(y[:, 0]), np.ascontiguousarray(y[:, 1])
     for M in np.unique(Mt).tolist():
         E = monomial_exponents(_degree_of(M))
         sel = None if ptr[-1] == T * M and Mt.min() == M else np.flatnonzero(Mt == M)
-        yy = y if sel is None else y[sel]
         ww = w if sel is None else w[sel]
         cv = (vertex if sel is None else vertex[sel]) * MMAX
-        p1, p2 = _powers(yy[:, 0], len(E)), _powers(yy[:, 1], len(E))
+        p1 = _powers(y0 if sel is None else y0[sel], M)
+        p2 = _powers(y1 if sel is None else y1[sel], M)
+        val = np.empty(len(ww))
         if sel is None:
             dv = data_e[e0:e0 + T * M].reshape(T, M)
             dc = cols_e[e0:e0 + T * M].reshape(T, M)
-            for m, (a, b) in enumerate(E):
-                np.multiply(p1[a] * p2[b], ww, out=dv[:, m])
-                np.add(cv, m, out=dc[:, m])
         else:
             start = e0 + ptr[sel]
-            for m, (a, b) in enumerate(E):
-                data_e[start + m] = p1[a] * p2[b] * ww
+        for m, (a, b) in enumerate(E):
+            np.multiply(p1[a], p2[b], out=val)
+            if sel is None:
+                np.multiply(val, ww, out=dv[:, m])
+                np.add(cv, m, out=dc[:, m])
+            else:
+                data_e[start + m] = val * ww
                 cols_e[start + m] = cv + m
 
 
