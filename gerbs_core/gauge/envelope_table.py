@@ -215,6 +215,7 @@ class EnvelopeTable:
         kn = self._pad["knots"]
         out = np.full((kn.shape[0], (1 << kn.shape[1].bit_length()) - 1), np.inf)
         out[:, :kn.shape[1]] = kn
+        out.setflags(write=False)
         return out
 
 
