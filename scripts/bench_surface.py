@@ -1,7 +1,8 @@
 """Benchmark GERBS blending surfaces against Blender's Subdivision Surface modifier.
 
-For Suzanne, an icosphere and a 32x32 quad grid at resolutions giving about 8k,
-32k and 126k output points: build time (BlendingSurface + stencil from scratch),
+For Suzanne, an icosphere and 32x32 and 64x64 quad grids at resolutions giving about 8k,
+32k and 126k output points: build time (BlendingSurface + stencil from scratch; the
+stencil's share printed separately),
 update time (W @ X), memory (tracemalloc peak of the build), nnz per row; and,
 when ``import bpy`` works, Blender's Subdivision Surface modifier at the matching
 level (level L <-> resolution 2**L) in the same run: build = add the modifier and
@@ -49,11 +50,17 @@ def gerbs_case(V, F, r, repeats, subsurf_build=None):
     """GERBS timings; with ``subsurf_build`` (a function timing one Subsurf build) the
     builds alternate with Subsurf builds, so both see the same machine load
     (returned as ``ss_build``, the median)."""
+    tst = []
+
     def build():
         s = BlendingSurface(V, F)
-        return s, s.stencil(r)
+        t = time.perf_counter()
+        st = s.stencil(r)
+        tst.append(time.perf_counter() - t)
+        return s, st
 
     build()  # warm-up (imports, kernel tables)
+    tst.clear()
     tcold, tss = [], []
     for _ in range(repeats):
         t = time.perf_counter()
@@ -73,7 +80,8 @@ def gerbs_case(V, F, r, repeats, subsurf_build=None):
     build()
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
-    return dict(points=st.shape[0], build=tb, update=tu, mem=peak / 1e6,
+    return dict(points=st.shape[0], build=tb, stencil=statistics.median(tst[:repeats]),
+                update=tu, mem=peak / 1e6,
                 nnz=st.nnz_per_row(), eps0=s.eps0,
                 ss_build=statistics.median(tss) if tss else None)
 
@@ -155,7 +163,8 @@ def main():
               "grid 64x64": P.grid(64, 64)}
     print("build: BlendingSurface + stencil from scratch; update: W @ X; "
           "Subsurf (ss) at level L = log2 r")
-    print(f"{'mesh':13} {'L/r':>4} {'points':>7} {'build s':>8} {'update ms':>9} "
+    print(f"{'mesh':13} {'L/r':>4} {'points':>7} {'build s':>8} {'stencil s':>9} "
+          f"{'update ms':>9} "
           f"{'mem MB':>7} "
           f"{'nnz/row':>7} {'eps0':>6} | {'ss points':>9} {'ss build s':>10} {'ss upd ms':>9} | "
           f"{'build x':>7} {'update x':>8}")
@@ -168,6 +177,7 @@ def main():
                            else (None, None))
             g = gerbs_case(V, F, r, args.repeats, ss_build)
             line = (f"{name:13} {level}/{r:<2} {g['points']:7d} {g['build']:8.3f} "
+                    f"{g['stencil']:9.3f} "
                     f"{g['update'] * 1e3:9.2f} {g['mem']:7.0f} {g['nnz']:7.1f} {g['eps0']:6.3f}")
             if bpy is not None:
                 b["build"] = g["ss_build"]

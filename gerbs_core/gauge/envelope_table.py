@@ -11,6 +11,7 @@ per-star :class:`RadialEnvelope` objects on demand.
 from __future__ import annotations
 
 import math
+from functools import cached_property
 
 import numpy as np
 
@@ -163,21 +164,59 @@ class EnvelopeTable:
         from .envelope import _eval_pieces
         theta = np.asarray(theta, dtype=np.float64)
         env = np.broadcast_to(np.asarray(env, dtype=np.int64), theta.shape).ravel()
-        x = theta.ravel()
-        pad = self._pad
-        kn = pad["knots"][env]                                     # (N, width)
-        t0 = kn[:, 0]
-        x = np.where(self.closed[env], t0 + np.mod(x - t0, self.span[env]),
-                     np.clip(x, self.first[env], self.last[env]))
-        j = np.clip((kn <= x[:, None]).sum(axis=1) - 1, 0, self.n_knots[env] - 2)
-        j1 = j + 1
-        rows = np.arange(len(x))
-        out = _eval_pieces(x, kn[rows, j], kn[rows, j1],
-                           pad["line_m"][env, j], pad["line_m"][env, j1],
-                           pad["line_a"][env, j], pad["line_a"][env, j1],
-                           pad["line_b"][env, j], pad["line_b"][env, j1],
+        x = self._reduce(env, theta.ravel())
+        at = self._interval(env, x)                 # flat index of knot j in the padding
+        at1 = at + 1
+        pad = self._flat
+        out = _eval_pieces(x, pad["knots"][at], pad["knots"][at1],
+                           pad["line_m"][at], pad["line_m"][at1],
+                           pad["line_a"][at], pad["line_a"][at1],
+                           pad["line_b"][at], pad["line_b"][at1],
                            self.kernel, nmax, self.exact)
         return out.reshape((nmax + 1,) + theta.shape)
+
+    @property
+    def _flat(self):
+        """The padded (S, width) tables raveled: entry (i, j) at i * width + j."""
+        return {k: v.reshape(-1) for k, v in self._pad.items()}
+
+    def _reduce(self, env, x):
+        """Angles x (N,) brought into envelope env's domain: closed periodic from its first
+        knot, open clipped to the sector (only the branch some star needs is computed)."""
+        closed = self.closed[env]
+        if closed.all():
+            t0 = self._pad["knots"][env, 0]
+            return t0 + np.mod(x - t0, self.span[env])
+        if not closed.any():
+            return np.clip(x, self.first[env], self.last[env])
+        t0 = self._pad["knots"][env, 0]
+        return np.where(closed, t0 + np.mod(x - t0, self.span[env]),
+                        np.clip(x, self.first[env], self.last[env]))
+
+    def _interval(self, env, x):
+        """Flat padded index of the knot interval [t_j, t_j+1] holding x (N,) in envelope
+        env (N,): j = #(knots <= x) - 1 clipped to [0, n_knots - 2]. The count comes from
+        a branchless binary search over the row of ``_search`` (the knots padded with inf
+        to 2^L - 1 columns): L gathers instead of a (N, width) compare."""
+        table = self._search
+        width = table.shape[1]
+        flat = table.reshape(-1)
+        base = env * width
+        count = np.zeros(len(x), dtype=np.int64)
+        step = (width + 1) >> 1
+        while step:
+            count += (flat[base + count + (step - 1)] <= x) * step
+            step >>= 1
+        j = np.clip(count - 1, 0, self.n_knots[env] - 2)
+        return env * self._pad["knots"].shape[1] + j
+
+    @cached_property
+    def _search(self):
+        kn = self._pad["knots"]
+        out = np.full((kn.shape[0], (1 << kn.shape[1].bit_length()) - 1), np.inf)
+        out[:, :kn.shape[1]] = kn
+        out.setflags(write=False)
+        return out
 
 
 def envelope_table(theta, radius, ptr, closed, kappa=0.8, shrink=0.95, kernel=None,

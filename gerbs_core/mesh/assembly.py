@@ -1,16 +1,17 @@
 """Assembly of the stencil factors B (P, V) and E (P, V M) on a sample lattice.
 
-For every sample p, evaluated in the face that owns it, and every corner slot k
-of that face: B[p, u_k] = Psi_k(p), E[p, u_k M + m] = Psi_k(p) mono_m(zeta_{u_k}(p))
-(:mod:`gerbs_core.mesh.stencil`). Vectorized per face-size class and chunk
-(:func:`gerbs_core.mesh.evaluate.groups`).
+For every sample p, evaluated in the face that owns it, and every corner k of that
+face: B[p, u_k] = Psi_k(p), E[p, u_k M + m] = Psi_k(p) mono_m(zeta_{u_k}(p))
+(:mod:`gerbs_core.mesh.stencil`).
 
-Both factors are written straight into their compressed-row arrays: the entries of
-a row are known in advance (B: one per corner of the sample's face; E: the
-coefficients of each corner's degree, lower degrees skipping the monomials they do
-not have), so each chunk scatters its values to their final places and no
-coordinate-format copy (three times the memory) is ever made. Values float64,
-indices int32 while they fit.
+The work is organised by *terms* (sample, corner), listed in the final order of the
+compressed rows: samples in order, and within a sample its face's corners by
+increasing vertex (so the column indices of both factors come out sorted). Then B's
+values are the partition values Psi of the terms as they come, and E's values are
+every term's Psi mono_m for its degree's monomials, one term after another: both
+factors are written in contiguous slices of their final arrays, chunk by chunk of
+samples, with no scatter, no coordinate-format copy and no index sort. Values
+float64, indices int32 while they fit.
 """
 from __future__ import annotations
 
@@ -18,24 +19,20 @@ import numpy as np
 import scipy.sparse as sp
 
 from .agreement import MMAX
-from .evaluate import corner_terms, groups
+from .monomials import monomial_exponents, n_monomials
 
-__all__ = ["assemble", "n_monomials"]
+__all__ = ["assemble", "CHUNK_SAMPLES"]
 
-
-def n_monomials(d):
-    """Coefficients of a local function of degree d (monomials of degree 1..d in 2D)."""
-    return d * (d + 3) // 2
+CHUNK_SAMPLES = 16_384   # samples per chunk (~65k terms on quads: the working set in cache)
 
 
 def _row_layout(topo, degrees, face):
     """Per sample (face (P,)): the row pointers of B and E (int64, (P + 1,))."""
-    sizes = topo.face_sizes
     per_face_e = np.add.reduceat(n_monomials(degrees[topo.face_vertices]),
                                  topo.face_offsets[:-1])
     ptr_b = np.zeros(len(face) + 1, dtype=np.int64)
     ptr_e = np.zeros(len(face) + 1, dtype=np.int64)
-    np.cumsum(sizes[face], out=ptr_b[1:])
+    np.cumsum(topo.face_sizes[face], out=ptr_b[1:])
     np.cumsum(per_face_e[face], out=ptr_e[1:])
     return ptr_b, ptr_e
 
@@ -44,38 +41,115 @@ def _index_type(nnz, n_cols):
     return np.int32 if max(nnz, n_cols) < 2 ** 31 - 1 else np.int64
 
 
+def _sorted_corners(topo):
+    """(C,): entry fo[f] + j is the corner of face f with the j-th smallest vertex."""
+    return np.lexsort((topo.face_vertices, topo.corner_face))
+
+
+class _Terms:
+    """The terms (sample, corner) of the samples [p0, p1) in row order: ``sample`` (T,)
+    local sample index, ``corner`` (T,), ``slot`` (T,) the corner's position in its
+    face, ``vertex`` (T,)."""
+
+    def __init__(self, topo, by_vertex, face, ptr_b, p0, p1):
+        t0, t1 = ptr_b[p0], ptr_b[p1]
+        counts = np.diff(ptr_b[p0:p1 + 1])
+        self.sample = np.repeat(np.arange(p1 - p0), counts)
+        first = topo.face_offsets[face[p0:p1]]
+        rank = np.arange(t1 - t0) - (ptr_b[p0:p1] - t0)[self.sample]
+        at = first[self.sample] + rank
+        self.corner = by_vertex[at]
+        self.slot = self.corner - first[self.sample]
+        self.vertex = topo.face_vertices[self.corner]
+
+
+def _partition(psi, terms, n_samples, n_max):
+    """Psi (T,) = psi / sum over the sample's corners, summed in corner order (as the
+    evaluation does), and max_k psi_k per sample (n_samples,)."""
+    per = np.zeros((n_max, n_samples))
+    per[terms.slot, terms.sample] = psi
+    total = per[0].copy()
+    for k in range(1, n_max):
+        total += per[k]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return psi / total[terms.sample], per.max(axis=0)
+
+
+def _write_mono(data_e, cols_e, e0, y, w, vertex, Mt):
+    """E's entries of the terms (their values Psi mono_m and columns u M + m), term after
+    term from e0: strided views of the output when all terms share one degree, else
+    one scatter per degree and monomial."""
+    T = len(w)
+    ptr = np.zeros(T + 1, dtype=np.int64)
+    np.cumsum(Mt, out=ptr[1:])
+    y0, y1 = np.ascontiguousarray(y[:, 0]), np.ascontiguousarray(y[:, 1])
+    for M in np.unique(Mt).tolist():
+        E = monomial_exponents(_degree_of(M))
+        sel = None if ptr[-1] == T * M and Mt.min() == M else np.flatnonzero(Mt == M)
+        ww = w if sel is None else w[sel]
+        cv = (vertex if sel is None else vertex[sel]) * MMAX
+        p1 = _powers(y0 if sel is None else y0[sel], M)
+        p2 = _powers(y1 if sel is None else y1[sel], M)
+        val = np.empty(len(ww))
+        if sel is None:
+            dv = data_e[e0:e0 + T * M].reshape(T, M)
+            dc = cols_e[e0:e0 + T * M].reshape(T, M)
+        else:
+            start = e0 + ptr[sel]
+        for m, (a, b) in enumerate(E):
+            np.multiply(p1[a], p2[b], out=val)
+            if sel is None:
+                np.multiply(val, ww, out=dv[:, m])
+                np.add(cv, m, out=dc[:, m])
+            else:
+                data_e[start + m] = val * ww
+                cols_e[start + m] = cv + m
+
+
+def _degree_of(M):
+    return {n_monomials(d): d for d in range(1, 8)}[M]
+
+
+def _powers(y, M):
+    """[1, y, y^2, ...] up to the highest exponent the M monomials need (as
+    :func:`gerbs_core.mesh.monomials.monomials` computes them)."""
+    d = _degree_of(M)
+    out = [np.ones_like(y)]
+    for _ in range(d):
+        out.append(out[-1] * y)
+    return out
+
+
 def assemble(model, lattice):
     """(B csr (P, V), E csr (P, V MMAX), eps) on ``lattice``; eps = min max_v psi_v.
 
     Rows are in sample order with sorted column indices (canonical csr)."""
     topo, deg = model.topology, np.asarray(model.degrees)
+    ch, cover = model.charts, model.cover
     x = lattice.map_to_polygon(model.layouts.corners)
+    face = lattice.face
     P, V = lattice.n_points, topo.n_vertices
-    ptr_b, ptr_e = _row_layout(topo, deg, lattice.face)
+    ptr_b, ptr_e = _row_layout(topo, deg, face)
     ib, ie = _index_type(ptr_b[-1], V), _index_type(ptr_e[-1], V * MMAX)
     data_b, cols_b = np.empty(ptr_b[-1]), np.empty(ptr_b[-1], dtype=ib)
     data_e, cols_e = np.empty(ptr_e[-1]), np.empty(ptr_e[-1], dtype=ie)
+    by_vertex = _sorted_corners(topo)
+    Mv = n_monomials(deg)
+    n_max = int(topo.face_sizes.max())
     eps = np.inf
-    for n, faces, sel, xb in groups(topo, model.layouts.corners, lattice.face, x):
-        u = topo.face_vertices[topo.face_offsets[faces][None, :] + np.arange(n)[:, None]]
-        _, Psi, mono, mx = corner_terms(model, n, faces, xb, 0, int(deg[u].max()))
-        valid = sel >= 0
-        eps = min(eps, float(mx[valid].min()))
-        rows = sel[valid]                                                    # (S,)
-        uu = np.broadcast_to(u[:, :, None], Psi[0].shape)[:, valid]          # (n, S)
-        w = Psi[0][:, valid]
-        at = ptr_b[rows][None, :] + np.arange(n)[:, None]
-        data_b[at], cols_b[at] = w, uu
-        # E: slot k's entries start after the coefficients of slots < k in the row
-        Mk = n_monomials(deg[uu])                                            # (n, S)
-        start = ptr_e[rows][None, :] + np.cumsum(Mk, axis=0) - Mk
-        M = mono[0].shape[-1]
-        keep = np.arange(M)[None, None, :] < Mk[..., None]
-        at = (start[..., None] + np.arange(M))[keep]
-        data_e[at] = (mono[0][:, valid] * w[..., None])[keep]
-        cols_e[at] = (uu[..., None] * MMAX + np.arange(M))[keep]
+    for p0 in range(0, P, CHUNK_SAMPLES):
+        p1 = min(P, p0 + CHUNK_SAMPLES)
+        terms = _Terms(topo, by_vertex, face, ptr_b, p0, p1)
+        xt = x[p0:p1][terms.sample]
+        psi, pol = cover.psi_jet(ch, terms.corner, xt, 0)
+        w, mx = _partition(psi[0], terms, p1 - p0, n_max)
+        eps = min(eps, float(mx.min()))
+        t0, t1 = ptr_b[p0], ptr_b[p1]
+        data_b[t0:t1] = w
+        cols_b[t0:t1] = terms.vertex
+        y = ch.to_chart(terms.corner, xt, 0, pol=pol)[0]
+        _write_mono(data_e, cols_e, ptr_e[p0], y, w, terms.vertex, Mv[terms.vertex])
     B = sp.csr_matrix((data_b, cols_b, ptr_b.astype(ib)), shape=(P, V))
     E = sp.csr_matrix((data_e, cols_e, ptr_e.astype(ie)), shape=(P, V * MMAX))
-    B.sort_indices()
-    E.sort_indices()
+    B.has_canonical_format = E.has_canonical_format = True
     return B, E, eps

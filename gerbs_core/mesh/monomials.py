@@ -27,8 +27,12 @@ def monomial_exponents(degree: int) -> np.ndarray:
     return _exponents(int(degree))
 
 
-def n_monomials(degree: int) -> int:
-    """M = degree (degree + 3) / 2, the number of monomials of degree 1..degree."""
+def n_monomials(degree):
+    """M = degree (degree + 3) / 2, the number of monomials of degree 1..degree (an int,
+    or an int array for an array of degrees)."""
+    if np.ndim(degree):
+        d = np.asarray(degree, dtype=np.int64)
+        return d * (d + 3) // 2
     return int(degree) * (int(degree) + 3) // 2
 
 
@@ -46,7 +50,10 @@ def monomials(y: np.ndarray, degree: int, nu: int = 0):
     for _ in range(degree):
         p1.append(p1[-1] * y[..., 0])
         p2.append(p2[-1] * y[..., 1])
-    out = [np.stack([p1[a] * p2[b] for a, b in E], axis=-1) if M else np.zeros(shape + (0,))]
+    m = np.empty(shape + (M,))
+    for i, (a, b) in enumerate(E):      # written in place: no M temporaries and stack
+        np.multiply(p1[a], p2[b], out=m[..., i])
+    out = [m]
     if nu >= 1:
         d = np.zeros(shape + (M, 2))
         for i, (a, b) in enumerate(E):
