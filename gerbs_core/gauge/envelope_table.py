@@ -2,7 +2,7 @@
 
 :func:`envelope_table` builds the smooth envelopes (:mod:`gerbs_core.gauge.envelope`) of S
 stars given as ragged polar vertex lists with array operations over all stars (validation,
-the pieces' lines, :func:`gerbs_core.gauge.blend.build_blend_ragged`); only stars whose
+the pieces' lines, :func:`gerbs_core.gauge.blend_ragged.build_blend_ragged`); only stars whose
 blend cannot be certified (none on the test and benchmark meshes) take the per-star
 fallbacks of :class:`~gerbs_core.gauge.envelope.RadialEnvelope`. :class:`EnvelopeTable`
 evaluates u~ = 1/rho~ of any envelope at any angle in one vectorized pass and gives the
@@ -16,7 +16,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidParameterError, InvalidPointSetError
-from .blend import _segments, build_blend_ragged
+from .blend_ragged import _segments, build_blend_ragged
 from .fallbacks import line_through
 
 __all__ = ["EnvelopeTable", "envelope_table", "polar_pieces", "validate_stars"]

@@ -111,7 +111,7 @@ def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95, exact=False
     only the chart angle is compressed). Stars of the same shape up to rotation share one
     envelope. Array operations over all stars (grouped by valence), no per-vertex work.
     fixed_ends (V, 2) bool, optional: boundary fans whose start / end ray is a cut crease
-    (fixed end-line scales, :func:`gerbs_core.gauge.blend.build_blend_ragged`); they share
+    (fixed end-line scales, :func:`gerbs_core.gauge.blend_ragged.build_blend_ragged`); they share
     envelopes only with fans of the same shape and the same flags.
     """
     from ..gauge.envelope_table import envelope_table

@@ -93,7 +93,7 @@ class PlanarStarCover:
     # -- the envelope -----------------------------------------------------
     def _subdivide(self):
         """Corner transitions of the envelope (DESIGN section 4, same rule as
-        :func:`gerbs_core.gauge.blend.build_blend`).
+        :func:`gerbs_core.gauge.blend_ragged.build_blend`).
 
         u~ = 1/rho~ is a GERBS spline in the angle whose local functions are the
         edges' own lines u_e = cos(t - nu_e) / p_e pulled in by c_e (kappa <= c_e
