@@ -65,8 +65,6 @@ from ..errors import InvalidParameterError, InvalidPointSetError
 
 __all__ = ["RadialEnvelope"]
 
-_eval_pieces = pieces_u      # the name EnvelopeTable imports
-
 TWO_PI = 2.0 * math.pi
 
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, InvalidPointSetError
 from .blend_ragged import _segments, build_blend_ragged
+from .envelope_spline import pieces_u
 from .fallbacks import line_through
 
 __all__ = ["EnvelopeTable", "envelope_table", "polar_pieces", "validate_stars"]
@@ -161,14 +162,13 @@ class EnvelopeTable:
         envelope's :meth:`RadialEnvelope.u_derivs`. Closed envelopes are periodic; open
         ones are evaluated at theta clipped to their sector (round-off of the unfolded
         angle must not extrapolate the end lines)."""
-        from .envelope import _eval_pieces
         theta = np.asarray(theta, dtype=np.float64)
         env = np.broadcast_to(np.asarray(env, dtype=np.int64), theta.shape).ravel()
         x = self._reduce(env, theta.ravel())
         at = self._interval(env, x)                 # flat index of knot j in the padding
         at1 = at + 1
         pad = self._flat
-        out = _eval_pieces(x, pad["knots"][at], pad["knots"][at1],
+        out = pieces_u(x, pad["knots"][at], pad["knots"][at1],
                            pad["line_m"][at], pad["line_m"][at1],
                            pad["line_a"][at], pad["line_a"][at1],
                            pad["line_b"][at], pad["line_b"][at1],
