@@ -59,7 +59,7 @@ import math
 import numpy as np
 
 from .blend_ragged import build_blend
-from .envelope_spline import envelope_u, pieces_u, reciprocal_derivs
+from .envelope_spline import envelope_u, reciprocal_derivs
 from .fallbacks import build_constant, build_fillet, interval_ratios
 from ..errors import InvalidParameterError, InvalidPointSetError
 
