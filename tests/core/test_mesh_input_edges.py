@@ -120,3 +120,38 @@ def test_fairness_rule_constants_are_checked(kw, name):
     with pytest.raises(InvalidParameterError) as exc:
         FairnessRule(**kw)
     assert exc.value.name == name
+
+
+def _ngon_lattice():
+    from gerbs_core.mesh.lattice import Lattice
+    V, F = P.ngon_ring(6)               # triangles, quads and one hexagon
+    T = MeshTopology(F, len(V))
+    X = V[T.face_vertices]
+    mean = np.add.reduceat(X, T.face_offsets[:-1], axis=0) / T.face_sizes[:, None]
+    return T, Lattice(T, 4), X, mean
+
+
+def test_lattice_fan_centres_are_used_and_checked():
+    T, lat, X, mean = _ngon_lattice()
+    base = lat.map_to_polygon(X)
+    np.testing.assert_array_equal(lat.map_to_polygon(X, centers=mean), base)
+    lifted = lat.map_to_polygon(X, centers=mean + [0.0, 0.0, 0.1])
+    ngon = T.face_sizes[lat.face] >= 5
+    assert ngon.any()
+    np.testing.assert_array_equal(lifted[~ngon], base[~ngon])   # only the n-gons' fans move
+    assert np.abs(lifted[ngon] - base[ngon]).max() == pytest.approx(0.1)
+    with pytest.raises(InvalidParameterError) as exc:
+        lat.map_to_polygon(X, centers=mean[:-1])
+    assert exc.value.name == "centers"
+
+
+@pytest.mark.xfail(strict=True, reason="Lattice.map_to_polygon checks `centers` only when "
+                   "the mesh has n-gons (polygon_map._fan_centres runs only for n >= 5): on "
+                   "a mesh of triangles and quads a wrongly shaped `centers` is silently "
+                   "ignored instead of raising InvalidParameterError('centers')")
+def test_lattice_centres_are_checked_without_ngons_too():
+    from gerbs_core.mesh.lattice import Lattice
+    V, F = P.grid(2)
+    T = MeshTopology(F, len(V))
+    with pytest.raises(InvalidParameterError):
+        Lattice(T, 3).map_to_polygon(V[T.face_vertices], centers=np.zeros((3, 2)))
