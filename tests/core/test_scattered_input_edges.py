@@ -79,3 +79,14 @@ def test_euclidean_metric_checks_its_dimension():
     with pytest.raises(InvalidParameterError, match="last axis must have length 2") as exc:
         Euclidean(2).dist(np.zeros((3, 3)), np.zeros(3))
     assert exc.value.name == "x"
+
+
+def test_a_polygon_edge_seen_under_no_angle_is_refused_naming_its_point():
+    """A 1e-13 edge makes the polygon not star-shaped in rounding (its edge is seen from the
+    point under an angle ~0)."""
+    polys = [p + SQUARE for p in P2]
+    polys[0] = P2[0] + np.array([[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [0.1 - 1e-13, 0.1],
+                                 [-0.1, 0.1]])
+    with pytest.raises(InvalidPointSetError, match="not star-shaped") as exc:
+        GERBSInterpolator(P2, V2, cover=polys, degree=0)
+    assert exc.value.indices == (0,)
