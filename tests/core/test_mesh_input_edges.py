@@ -47,6 +47,12 @@ def test_face_entries_too_large_for_an_index_are_bad_shape():
     assert exc.value.problem == "bad_shape" and exc.value.indices == (1,)
 
 
+def test_a_nested_face_entry_is_bad_shape():
+    with pytest.raises(InvalidMeshError) as exc:
+        MeshTopology([[0, 1, 2], [0, [2, 3], 1]])
+    assert exc.value.problem == "bad_shape" and exc.value.indices == (1,)
+
+
 def test_all_negative_indices_are_out_of_range():
     with pytest.raises(InvalidMeshError) as exc:
         MeshTopology([[-1, -2, -3]])

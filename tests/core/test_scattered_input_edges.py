@@ -23,6 +23,7 @@ SQUARE = np.array([[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]])
     (dict(kappa=1.2), "kappa"), (dict(kappa=0.0), "kappa"), (dict(shrink=0.0), "shrink"),
     (dict(cover=[p + SQUARE for p in P2[:-1]]), "cover"),
     (dict(cover="voronoi", domain=np.zeros((2, 2))), "domain"),
+    (dict(degree=2, n_neighbors=3), "n_neighbors"),
 ])
 def test_bad_settings_name_the_argument(kw, name):
     with pytest.raises(InvalidParameterError) as exc:
