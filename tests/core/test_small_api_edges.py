@@ -1,0 +1,72 @@
+"""Small public accessors and checks nobody else exercises: the package namespace, a GERBS
+curve's read-only data, the exact test surfaces' signed distances and the mesh-quality
+helpers' input checks.
+"""
+import numpy as np
+import pytest
+
+import gerbs_core
+from gerbs_core import ERBS, GERBSBasis, GERBSCurve
+from gerbs_core.errors import InvalidParameterError
+from gerbs_core.testing.exact import HeightField, Torus, UnitSphere
+from gerbs_core.testing.fairness import triangle_normals
+
+KNOTS = np.array([0.0, 0.5, 1.25, 2.0, 2.5, 3.5, 4.0])
+
+
+def test_package_dir_lists_exactly_the_public_names():
+    names = dir(gerbs_core)
+    assert names == gerbs_core.__all__ and "BlendingSurface" in names
+    for name in names:
+        assert getattr(gerbs_core, name) is not None
+
+
+def test_curve_exposes_its_basis_knots_and_local_curves_read_only():
+    L = np.random.default_rng(0).normal(size=(5, 2, 3))
+    c = GERBSCurve(KNOTS, L)
+    assert isinstance(c.basis, GERBSBasis)
+    np.testing.assert_array_equal(c.knots, KNOTS)
+    np.testing.assert_array_equal(c.local_curves, L)
+    assert not c.local_curves.flags.writeable and not c.knots.flags.writeable
+    t = np.linspace(0.6, 3.4, 9)
+    np.testing.assert_array_equal(c.basis(t), GERBSBasis(KNOTS)(t))
+    # constant local curves are stored with m = 0
+    assert GERBSCurve(KNOTS, L[:, 0]).local_curves.shape == (5, 1, 3)
+
+
+def test_a_kernel_list_with_a_non_kernel_names_its_entry():
+    with pytest.raises(InvalidParameterError, match="entry 2 is not a Kernel") as exc:
+        GERBSBasis(KNOTS, [ERBS(), ERBS(), "erbs", ERBS(), ERBS(), ERBS()])
+    assert exc.value.name == "kernel"
+
+
+@pytest.mark.parametrize("surface, p, d", [
+    (UnitSphere(), [[0.0, 0.0, 2.0], [0.5, 0.0, 0.0]], [1.0, -0.5]),
+    (Torus(1.0, 0.4), [[1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 0.0, 0.1]], [-0.4, 0.6, -0.3]),
+])
+def test_signed_distances_of_the_exact_surfaces(surface, p, d):
+    np.testing.assert_allclose(surface.signed_distance(np.array(p)), d, atol=1e-12)
+
+
+def test_height_field_signed_distance_on_a_plane():
+    flat = HeightField(lambda x, y: [0 * x + 0.25, 0 * x, 0 * x, 0 * x, 0 * x, 0 * x])
+    d = flat.signed_distance(np.array([[0.1, 0.2, 1.0], [0.0, 0.0, 0.0]]))
+    np.testing.assert_allclose(np.abs(d), [0.75, 0.25], atol=1e-9)
+    assert d[0] * d[1] < 0                     # the two sides of the surface
+
+
+def test_exact_surface_inputs_are_checked():
+    with pytest.raises(ValueError, match=r"points must have shape \(N, 3\)"):
+        UnitSphere().closest(np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="need R > r > 0"):
+        Torus(0.3, 0.4)
+
+
+@pytest.mark.parametrize("points, triangles, text", [
+    (np.zeros((3, 2)), [[0, 1, 2]], "points must have shape"),
+    (np.zeros((3, 3)), [[0, 1]], "triangles must have shape"),
+    (np.zeros((3, 3)), [[0, 1, 3]], "out of range"),
+])
+def test_mesh_quality_helpers_check_their_input(points, triangles, text):
+    with pytest.raises(ValueError, match=text):
+        triangle_normals(points, triangles)
