@@ -250,7 +250,7 @@ def envelope_table(theta, radius, ptr, closed, kappa=0.8, shrink=0.95, kernel=No
                              kernel)
     rb = build_blend_ragged(theta, normal, dist, ptr, closed, span, kappa, kernel, fixed)
     good = rb.ok & (1.0 / rb.rmin <= 1.0 + 1e-9) & (1.0 / rb.rmax >= kappa * (1.0 - 1e-9))
-    method = np.where(good, "blend", "")
+    method = np.where(good, "blend", "").astype(object)  # the fallbacks' longer names fit
     min_ratio = shrink / rb.rmax
     if good.all():
         kptr, knots, line_m = rb.knot_ptr, rb.knots, rb.line_m

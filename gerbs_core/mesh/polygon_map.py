@@ -61,6 +61,7 @@ def map_to_polygon(lat, corners2d, centers=None, local: bool = False) -> np.ndar
     if X.ndim != 2 or X.shape[0] != tp.n_corners:
         raise InvalidParameterError("corners2d", f"must have shape ({tp.n_corners}, d), got "
                                     f"{X.shape}")
+    ctr = _fan_centres(tp, X, centers) if centers is not None else None  # checked always
     face, fan, uv = _params(lat, local)
     fo, n = tp.face_offsets[face], tp.face_sizes[face]
     a, b = uv[:, :1], uv[:, 1:]
@@ -74,7 +75,8 @@ def map_to_polygon(lat, corners2d, centers=None, local: bool = False) -> np.ndar
               + a[s] * b[s] * X[c + 2] + (1 - a[s]) * b[s] * X[c + 3])
     s = n >= 5
     if s.any():
-        ctr = _fan_centres(tp, X, centers)
+        if ctr is None:
+            ctr = _fan_centres(tp, X, None)
         k = fan[s]
         c0 = fo[s] + k
         c1 = fo[s] + (k + 1) % n[s]

@@ -83,9 +83,6 @@ def test_fallback_stars_get_the_envelope_radial_envelope_builds(table, refs):
                                    rtol=1e-11, atol=1e-11)
 
 
-@pytest.mark.xfail(strict=True, reason="envelope_table stores the methods in a '<U5' array "
-                   "(np.where(good, 'blend', '')): a fallback star's 'fillet' / 'constant' "
-                   "is truncated to 'fille' / 'const'")
 def test_fallback_stars_report_their_method(table, refs):
     assert [str(m) for m in table.method] == [e.method for e in refs]
 

@@ -151,10 +151,6 @@ def test_lattice_fan_centres_are_used_and_checked():
     assert exc.value.name == "centers"
 
 
-@pytest.mark.xfail(strict=True, reason="Lattice.map_to_polygon checks `centers` only when "
-                   "the mesh has n-gons (polygon_map._fan_centres runs only for n >= 5): on "
-                   "a mesh of triangles and quads a wrongly shaped `centers` is silently "
-                   "ignored instead of raising InvalidParameterError('centers')")
 def test_lattice_centres_are_checked_without_ngons_too():
     from gerbs_core.mesh.lattice import Lattice
     V, F = P.grid(2)
