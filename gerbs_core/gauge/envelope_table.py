@@ -130,22 +130,6 @@ class EnvelopeTable:
     def __len__(self) -> int:
         return len(self.knot_ptr) - 1
 
-    @classmethod
-    def from_envelopes(cls, envelopes):
-        """The table of a sequence of :class:`RadialEnvelope` (sharing kappa, shrink,
-        exact and kernel)."""
-        envelopes = list(envelopes)
-        if not envelopes:
-            raise InvalidParameterError("envelopes", "need at least one envelope")
-        cat = lambda name: np.concatenate([getattr(e, name) for e in envelopes])  # noqa: E731
-        kptr = np.concatenate([[0], np.cumsum([len(e.knots) for e in envelopes])])
-        vptr = np.concatenate([[0], np.cumsum([len(e.theta) for e in envelopes])])
-        e0 = envelopes[0]
-        return cls(kptr, cat("knots"), cat("line_m"), cat("line_a"), cat("line_b"),
-                   [e.closed for e in envelopes], cat("theta"), cat("radius"), vptr,
-                   [e.method for e in envelopes], [e.min_ratio for e in envelopes],
-                   e0.kappa, e0.shrink, e0.exact, e0.kernel)
-
     def envelope(self, i: int):
         """Envelope i as a :class:`~gerbs_core.gauge.envelope.RadialEnvelope`."""
         from .envelope import RadialEnvelope

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-__all__ = ["exp_series", "logistic_series", "mul_series", "to_derivatives"]
+__all__ = ["exp_series", "logistic_series", "to_derivatives"]
 
 
 def exp_series(E, w0=None):
@@ -56,22 +56,6 @@ def logistic_series(g, F0, G0):
     return F
 
 
-def mul_series(a, b):
-    """Cauchy product of two series of equal length."""
-    n = len(a) - 1
-    out = []
-    for k in range(n + 1):
-        acc = a[0] * b[k]
-        for i in range(1, k + 1):
-            acc = acc + a[i] * b[k - i]
-        out.append(acc)
-    return out
-
-
-def to_derivatives(series, out=None, offset=0):
-    """Write k! * series[k] into ``out[offset + k]`` (a new stacked array if None)."""
-    if out is None:
-        return np.stack([math.factorial(k) * s for k, s in enumerate(series)])
-    for k, s in enumerate(series):
-        out[offset + k] = math.factorial(k) * s
-    return out
+def to_derivatives(series):
+    """The derivatives k! * series[k], stacked (len(series), ...)."""
+    return np.stack([math.factorial(k) * s for k, s in enumerate(series)])

@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numpy.polynomial import chebyshev as cheb
 
-__all__ = ["ChebyshevMaster", "PiecewisePoly", "fit_uniform", "CHUNK"]
+__all__ = ["ChebyshevMaster", "PiecewisePoly", "CHUNK"]
 
 CHUNK = 1 << 15        # points per chunk of the fast evaluators (256 KiB per temporary)
 
@@ -188,18 +188,10 @@ class PiecewisePoly:
         np.maximum(res, 0.0, out=res)
 
 
-def fit_uniform(F, M: int, deg: int) -> np.ndarray:
-    """Power-basis coefficients (deg+1, M+1) interpolating F at Chebyshev nodes.
-
-    Piece i covers [i/M, (i+1)/M] with local y = t*M - i; the extra piece M is
-    the constant 1. ``F`` is evaluated at (deg+1)*M points.
-    """
-    breaks = np.linspace(0.0, 1.0, M + 1)
-    return fit_pieces(F, breaks, deg)
-
-
 def fit_pieces(F, breaks: np.ndarray, deg: int) -> np.ndarray:
-    """As :func:`fit_uniform` for arbitrary break points."""
+    """Power-basis coefficients (deg+1, M+1) interpolating F at Chebyshev nodes of each
+    piece [breaks[i], breaks[i+1]] (local y in [0, 1]); the extra piece M is the
+    constant 1. ``F`` is evaluated at (deg+1)*M points."""
     M = breaks.size - 1
     y = (_cheb_nodes(deg + 1) + 1.0) / 2.0                  # nodes in [0, 1]
     a, h = breaks[:-1], np.diff(breaks)

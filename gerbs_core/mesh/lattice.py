@@ -277,13 +277,6 @@ class Lattice:
         """
         return output_edges(self, quads)
 
-    def template_params(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """(uv (m, 2), fan (m,)) of every lattice point of an n-gon in template order: the
-        local table of any face with n corners (``local_uv/local_fan[local_offsets[f]:
-        local_offsets[f+1]]``), without building the whole table."""
-        uv, fan = template(int(n), self.resolution)[:2]
-        return uv, fan
-
     def face_groups(self) -> tuple[np.ndarray, np.ndarray]:
         """(order (P,), offsets (F+1,)): ``order[offsets[f]:offsets[f+1]]`` are the samples
         evaluated in face f (``face[p] == f``), for per-face batched evaluation."""

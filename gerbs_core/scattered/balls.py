@@ -109,9 +109,3 @@ class BallCover:
         if want_phi:
             phi = _masked(self.metric.bump_jet(y, self.rho[j], self.kernel, nu), valid, nu)
         return psi, phi
-
-    def nbytes_per_query(self, K, nu):
-        """Working bytes per query row for K candidates (for the chunk size)."""
-        n = self.points.shape[1]
-        per = 1 + (n if nu >= 1 else 0) + (n * n if nu >= 2 else 0)
-        return 8 * K * (6 * n + 12 * per) + 64 * K

@@ -378,6 +378,3 @@ class Bounded(Metric):
 
     def tree_coords(self, x):
         return self.base.tree_coords(x)
-
-    def dist_from_tree(self, dt):
-        return dt / (1.0 + dt)
