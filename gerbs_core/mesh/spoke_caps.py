@@ -133,8 +133,7 @@ def spoke_caps(topo, charts, corners2d, u_of, kernel) -> SpokeCaps | None:
     nxt, prv = np.asarray(topo.corner_next), np.asarray(topo.corner_prev)
     ta = np.asarray(charts.theta0, dtype=np.float64)
     tb = ta + charts.alpha
-    rho_a, rho_b = 1.0 / u_of(cs, ta), 1.0 / u_of(cs, tb)
-    rho_m = 1.0 / u_of(cs, 0.5 * (ta + tb))
+    rho_a, rho_m, rho_b = (1.0 / u_of(cs[:, None], np.stack([ta, 0.5 * (ta + tb), tb], 1))).T
     ida, idb, rev_a, _ = _spoke_ids(topo)
     spike = np.full(2 * C, np.inf)       # per directed edge: min over its sectors
     np.minimum.at(spike, ida, rho_a / rho_m)
