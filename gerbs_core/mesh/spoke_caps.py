@@ -39,13 +39,15 @@ from ..splines.evaluate import falling_jet, rising_jet
 
 __all__ = ["SpokeCaps", "spoke_caps", "disabled"]
 
-# Measured on bench_shape (Cone, UV sphere; tried against 0.8 / 0.9 / 1.5 / 2): the cap
-# leaves the spoke's far part to w where g_w <= BETA (well inside w's plateau-to-edge
-# transition), with the margin GAMMA; MU keeps the cap at >= twice v's shortest reach, so
-# the capped support stays round; SIGMA = 3 separates sliver fans (spoke / middle reach
-# 4-10) from every regular star (icospheres, tori, the Cube, Suzanne: below 3).
+# BETA, GAMMA: the spoke beyond GAMMA R from v is left to w's support where g_w <= BETA
+# (psi_w well above 0 there, so the cover stays thick); MU: the cap stays >= twice v's
+# shortest reach (the capped support stays round, its bump's slope bounded); SIGMA: a
+# spike reaches SIGMA times further than mid-sector (Cone 8.6, UV sphere 4.1 next to the
+# poles; icospheres, tori, the Cube, airplane, bone at most 1.6). Spikes both ways (the
+# Cylinder's sides, 6.8) are not capped: neither support covers the other's. The
+# prototype's values (issue 11's Cone investigation), measured with bench_shape.
 BETA, GAMMA, MU, SIGMA = 0.65, 0.8, 2.0, 3.0
-P = 4                    # the soft minimum's exponent: 4 keeps u_new = u~ to 1e-4 where U < u~ / 10
+P = 4                    # soft minimum: U <= u~ / 2 changes u by < 1.6% ((1 + 2^-4)^(1/4))
 MIN_SAMPLES = 65         # per sector, for min_theta rho~_v (only at vertices with a candidate cap)
 
 _ENABLED = [True]
