@@ -90,6 +90,8 @@ class SpokeCaps:
         """u_new = (u~^p + U^p)^(1/p) and its theta-derivatives from the jet u of u~
         (chain rule, exact given the jets); u itself where U = 0. corners and theta as
         for :meth:`~gerbs_core.mesh.cover.StarCover.reciprocal_radius`."""
+        if nu > 2:
+            raise ValueError(f"spoke caps: derivatives up to order 2, not {nu}")
         theta, corners = np.asarray(theta, dtype=np.float64), np.asarray(corners)
         if corners.ndim and corners.shape == theta.shape[:-1]:
             corners = corners[..., None]        # one corner per row of samples
@@ -107,8 +109,6 @@ class SpokeCaps:
             A2 = P * ((P - 1) * (u[0] ** (P - 2) * u[1] ** 2 + U[0] ** (P - 2) * U[1] ** 2)
                       + u[0] ** (P - 1) * u[2] + U[0] ** (P - 1) * U[2])
             out.append(f * (A2 / (P * A) + (1.0 / P) * (1.0 / P - 1.0) * (A1 / A) ** 2))
-        if nu >= 3:
-            raise ValueError("spoke caps: derivatives up to order 2")
         on = U[0] > 0.0
         return [np.where(on, a, b) for a, b in zip(out, u)]
 
@@ -120,7 +120,7 @@ def _spoke_ids(topo):
     C = topo.n_corners
     twin, prv = np.asarray(topo.halfedge_twin), np.asarray(topo.corner_prev)
     rev = np.where(twin >= 0, twin, C + np.arange(C))
-    return np.arange(C), rev[prv], rev, prv
+    return np.arange(C), rev[prv], rev
 
 
 def spoke_caps(topo, charts, corners2d, u_of, kernel) -> SpokeCaps | None:
@@ -136,7 +136,7 @@ def spoke_caps(topo, charts, corners2d, u_of, kernel) -> SpokeCaps | None:
     ta = np.asarray(charts.theta0, dtype=np.float64)
     tb = ta + charts.alpha
     rho_a, rho_m, rho_b = (1.0 / u_of(cs[:, None], np.stack([ta, 0.5 * (ta + tb), tb], 1))).T
-    ida, idb, rev_a, _ = _spoke_ids(topo)
+    ida, idb, rev_a = _spoke_ids(topo)
     spike = np.full(2 * C, np.inf)       # per directed edge: min over its sectors
     np.minimum.at(spike, ida, rho_a / rho_m)
     np.minimum.at(spike, idb, rho_b / rho_m)
@@ -160,4 +160,7 @@ def spoke_caps(topo, charts, corners2d, u_of, kernel) -> SpokeCaps | None:
     if not cap.any():
         return None
     Ua, Ub = cap[ida], cap[idb]
-    return SpokeCaps(Ua, Ub, ta, tb, kernel, (Ua > 0) | (Ub > 0))
+    arrays = (Ua, Ub, ta.copy(), tb, (Ua > 0) | (Ub > 0))
+    for a in arrays:
+        a.flags.writeable = False
+    return SpokeCaps(*arrays[:4], kernel, arrays[4])
