@@ -218,8 +218,8 @@ class StarCover:
     ``env_offset`` (C,) its angle offset, ``kernel`` the GERBS kernel of the bumps.
     """
 
-    def __init__(self, table, corner_env, env_offset, kernel):
-        self.table = table
+    def __init__(self, table, corner_env, env_offset, kernel, caps=None):
+        self.table, self.caps = table, caps       # caps: spoke_caps.SpokeCaps or None
         corner_env.flags.writeable = False
         env_offset.flags.writeable = False
         self.corner_env, self.env_offset, self.kernel = corner_env, env_offset, kernel
@@ -230,7 +230,8 @@ class StarCover:
 
     def reciprocal_radius(self, corners, theta, nu: int):
         """[u~, u~', u~''] (u~ = 1 / rho~) of each corner's envelope at unfolded angles theta."""
-        return eval_envelopes(self.table, self.corner_env, self.env_offset, corners, theta, nu)
+        u = eval_envelopes(self.table, self.corner_env, self.env_offset, corners, theta, nu)
+        return u if self.caps is None else self.caps.apply(u, corners, theta, nu)
 
     def psi_jet(self, charts, corners, x, nu: int, pol=None):
         """Jet of psi_v = b(r u~(theta)) at face points x (..., 2) of the corners' faces
@@ -249,7 +250,14 @@ def star_cover(topo, charts, corners2d, kernel, kappa=0.8, shrink=0.95, exact=Fa
     """The star cover of a mesh with face layouts corners2d (see the module docstring).
     ``exact``: the exact (kinked) star radius instead of the smooth envelope -- a
     deliberately non-smooth variant, the control of the smoothness tests. ``fixed_ends``
-    (V, 2): see :func:`build_envelopes`."""
+    (V, 2): see :func:`build_envelopes`. Envelope spikes at sliver fans are capped
+    (:mod:`gerbs_core.mesh.spoke_caps`; not with ``exact``)."""
     table, ce, eo = build_envelopes(topo, charts, corners2d, kappa=kappa, shrink=shrink,
                                     exact=exact, kernel=kernel, fixed_ends=fixed_ends)
-    return StarCover(table, ce, eo, kernel)
+    cover = StarCover(table, ce, eo, kernel)
+    if exact:
+        return cover
+    from .spoke_caps import spoke_caps
+    caps = spoke_caps(topo, charts, corners2d, lambda c, t: cover.reciprocal_radius(c, t, 0)[0],
+                      kernel)
+    return cover if caps is None else StarCover(table, ce, eo, kernel, caps)

@@ -17,6 +17,7 @@ of that adapter) or any callable f(V, F, r) -> output dict (see
 """
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.util
 from pathlib import Path
@@ -24,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import gerbs_core
+from gerbs_core.mesh import spoke_caps
 from gerbs_core.testing import mean_curvature_from_derivatives
 
 # GERBS configurations measured side by side (--variant a,b,c): name -> options.
@@ -40,18 +42,23 @@ VARIANTS = {
     "former": {"fairness": gerbs_core.FairnessRule(fold=0.0, resolution=4)},
     "energy-res-3": {"fairness": gerbs_core.FairnessRule(resolution=3)},
     "energy-res-5": {"fairness": gerbs_core.FairnessRule(resolution=5)},
+    # star covers without the spoke caps of sliver fans (gerbs_core.mesh.spoke_caps)
+    "no-caps": {"spoke_caps": False},
 }
 
 
 def gerbs_samples(V, F, r, exact=True, **options):
     """GERBS surface of the cage (V (V,3), F faces) sampled at resolution r.
 
-    options: keyword arguments of gerbs_core.BlendingSurface. exact: also the
+    options: keyword arguments of gerbs_core.BlendingSurface, and ``spoke_caps=False``
+    (covers without :mod:`gerbs_core.mesh.spoke_caps`). exact: also the
     mean curvature from the exact first and second derivatives (else None).
     Returns the output dict of this module; the mesh vertices are the samples
     ``lat.vertex_sample``, the normals dS/dx1 x dS/dx2 normalised.
     """
-    s = gerbs_core.BlendingSurface(V, F, **options)
+    caps = options.pop("spoke_caps", True)
+    with contextlib.nullcontext() if caps else spoke_caps.disabled():
+        s = gerbs_core.BlendingSurface(V, F, **options)
     if not exact:
         P, T, N = s.tessellate(r)
         return {"points": P, "triangles": np.asarray(T), "normals": N, "H_exact": None}
