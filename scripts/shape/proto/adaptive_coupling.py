@@ -3,13 +3,13 @@ local function turns against its faces more than its chosen data fit did, scale 
 vertex's agreement and tension rows by ``alpha`` and couple again (``passes`` times)."""
 import dataclasses
 import sys
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 sys.path.insert(0, str(Path(__file__).resolve().parents[3]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+from shape.patching import patching, run_variant  # noqa: E402
 import gerbs_core.mesh.agreement as ag  # noqa: E402
 from gerbs_core.mesh.coupling import coupled_fits  # noqa: E402
 from gerbs_core.mesh.fits import candidate_fits_all  # noqa: E402
@@ -62,23 +62,11 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule, sharp=None, constr
     return degrees, fits
 
 
-@contextmanager
 def patched(**opts):
     import gerbs_core.mesh.surface as su
-    old, oldo = su.fair_fits, dict(OPTS)
-    OPTS.update(opts)
-    su.fair_fits = fair_fits
-    try:
-        yield
-    finally:
-        su.fair_fits = old
-        OPTS.clear()
-        OPTS.update(oldo)
+    return patching(OPTS, opts, [(su, "fair_fits", fair_fits)])
 
 
 def variant(V, F, r, exact=True, **opts):
     """bench_shape prototype variant: the default surface with this module's change."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-    from shape import methods
-    with patched(**opts):
-        return methods.gerbs_samples(V, F, r, exact=exact)
+    return run_variant(patched, V, F, r, exact=exact, **opts)

@@ -1,12 +1,13 @@
 """Prototype: the fold penalty also charges a candidate whose Jacobian degenerates in its
 support: q(y) = 2 |J1 x J2| / (|J1|^2 + |J2|^2) (1 conformal, 0 singular) against q(0)."""
 import sys
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+from shape.patching import patching, run_variant  # noqa: E402
 import gerbs_core.mesh.agreement as ag  # noqa: E402
 from gerbs_core.mesh.monomials import monomials, n_monomials  # noqa: E402
 
@@ -32,22 +33,10 @@ def penalty(cands, X, smp, fn, h, rule, _old=ag._fold_penalty):
     return out + (OPTS["gamma"] * h[smp.vertex] ** 2 * smp.weight * smp.psi)[:, None] * extra
 
 
-@contextmanager
 def patched(**opts):
-    old, oldo = ag._fold_penalty, dict(OPTS)
-    OPTS.update(opts)
-    ag._fold_penalty = penalty
-    try:
-        yield
-    finally:
-        ag._fold_penalty = old
-        OPTS.clear()
-        OPTS.update(oldo)
+    return patching(OPTS, opts, [(ag, "_fold_penalty", penalty)])
 
 
 def variant(V, F, r, exact=True, **opts):
     """bench_shape prototype variant: the default surface with this module's change."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-    from shape import methods
-    with patched(**opts):
-        return methods.gerbs_samples(V, F, r, exact=exact)
+    return run_variant(patched, V, F, r, exact=exact, **opts)

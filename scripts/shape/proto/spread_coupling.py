@@ -3,12 +3,13 @@
 ``spread`` degrees: their rows' weights times ``beta`` in the coupling sweeps."""
 import dataclasses
 import sys
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
+from shape.patching import patching, run_variant  # noqa: E402
 import gerbs_core.mesh.agreement as ag  # noqa: E402
 import gerbs_core.mesh.coupling as cp  # noqa: E402
 
@@ -46,23 +47,11 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule, sharp=None, constr
     return _old(topo, charts, corners2d, cover, rings, X, rule, sharp, constraints)
 
 
-@contextmanager
 def patched(**opts):
     import gerbs_core.mesh.surface as su
-    old_ff, old_cf, oldo = su.fair_fits, ag.coupled_fits, dict(OPTS)
-    OPTS.update(opts)
-    su.fair_fits, ag.coupled_fits = fair_fits, coupled
-    try:
-        yield
-    finally:
-        su.fair_fits, ag.coupled_fits = old_ff, old_cf
-        OPTS.clear()
-        OPTS.update(oldo)
+    return patching(OPTS, opts, [(su, "fair_fits", fair_fits), (ag, "coupled_fits", coupled)])
 
 
 def variant(V, F, r, exact=True, **opts):
     """bench_shape prototype variant: the default surface with this module's change."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-    from shape import methods
-    with patched(**opts):
-        return methods.gerbs_samples(V, F, r, exact=exact)
+    return run_variant(patched, V, F, r, exact=exact, **opts)
