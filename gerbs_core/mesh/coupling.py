@@ -58,7 +58,19 @@ class CoupledFits:
 
     def __call__(self, X):
         """Coefficients (V MMAX, k) for positions X (V, k) or (V,)."""
-        return self._map(np.asarray(X, dtype=np.float64))
+        X = np.asarray(X, dtype=np.float64)
+        # constants have zero coefficients (the pin carries them): take off each row's
+        # response to constants times its own vertex's position, as the row-sum correction
+        # of `operator` does, so that the round-off of ill-conditioned fits cannot show as
+        # W @ 1 != 1; row i's correction reads only its own vertex (locality is kept)
+        r = self._constant_response
+        own = X[np.arange(len(r)) // (len(r) // self.shape[1])]
+        return self._map(X) - (r * own if X.ndim == 1 else r[:, None] * own)
+
+    @cached_property
+    def _constant_response(self) -> np.ndarray:
+        """The map applied to constants (V MMAX,): zero but for round-off."""
+        return self._map(np.ones(self.shape[1]))
 
     def _map(self, Y):
         """The map applied to Y: a dense (V, k) array, or a sparse (V, V) matrix."""
