@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .agreement import MMAX
-from .monomials import monomial_exponents, n_monomials
+from .monomials import monomial_exponents, n_monomials, powers
 
 __all__ = ["assemble", "CHUNK_SAMPLES"]
 
@@ -84,12 +84,13 @@ def _write_mono(data_e, cols_e, e0, y, w, vertex, Mt):
     np.cumsum(Mt, out=ptr[1:])
     y0, y1 = np.ascontiguousarray(y[:, 0]), np.ascontiguousarray(y[:, 1])
     for M in np.unique(Mt).tolist():
-        E = monomial_exponents(_degree_of(M))
+        d = _degree_of(M)
+        E = monomial_exponents(d)
         sel = None if ptr[-1] == T * M and Mt.min() == M else np.flatnonzero(Mt == M)
         ww = w if sel is None else w[sel]
         cv = (vertex if sel is None else vertex[sel]) * MMAX
-        p1 = _powers(y0 if sel is None else y0[sel], M)
-        p2 = _powers(y1 if sel is None else y1[sel], M)
+        p1 = powers(y0 if sel is None else y0[sel], d)
+        p2 = powers(y1 if sel is None else y1[sel], d)
         val = np.empty(len(ww))
         if sel is None:
             dv = data_e[e0:e0 + T * M].reshape(T, M)
@@ -108,16 +109,6 @@ def _write_mono(data_e, cols_e, e0, y, w, vertex, Mt):
 
 def _degree_of(M):
     return {n_monomials(d): d for d in range(1, 8)}[M]
-
-
-def _powers(y, M):
-    """[1, y, y^2, ...] up to the highest exponent the M monomials need (as
-    :func:`gerbs_core.mesh.monomials.monomials` computes them)."""
-    d = _degree_of(M)
-    out = [np.ones_like(y)]
-    for _ in range(d):
-        out.append(out[-1] * y)
-    return out
 
 
 def assemble(model, lattice):

@@ -11,7 +11,7 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["monomial_exponents", "monomials", "n_monomials", "bending_gram"]
+__all__ = ["monomial_exponents", "monomials", "n_monomials", "powers", "bending_gram"]
 
 
 @lru_cache(maxsize=None)
@@ -36,6 +36,15 @@ def n_monomials(degree):
     return int(degree) * (int(degree) + 3) // 2
 
 
+def powers(t: np.ndarray, degree: int) -> list:
+    """[1, t, t^2, ..., t^degree] of an array t (each power one product from the last:
+    the factors every monomial evaluator multiplies)."""
+    out = [np.ones_like(t)]
+    for _ in range(int(degree)):
+        out.append(out[-1] * t)
+    return out
+
+
 def monomials(y: np.ndarray, degree: int, nu: int = 0):
     """Monomials of chart points y (..., 2) and their derivatives, exact.
 
@@ -45,11 +54,7 @@ def monomials(y: np.ndarray, degree: int, nu: int = 0):
     E = monomial_exponents(degree)
     M = len(E)
     shape = y.shape[:-1]
-    p1 = [np.ones(shape)]
-    p2 = [np.ones(shape)]
-    for _ in range(degree):
-        p1.append(p1[-1] * y[..., 0])
-        p2.append(p2[-1] * y[..., 1])
+    p1, p2 = powers(y[..., 0], degree), powers(y[..., 1], degree)
     m = np.empty(shape + (M,))
     for i, (a, b) in enumerate(E):      # written in place: no M temporaries and stack
         np.multiply(p1[a], p2[b], out=m[..., i])
