@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import ids
+from . import ids, mesh_io
 
 
 @dataclass(frozen=True, eq=False)
@@ -141,26 +141,13 @@ def read_carried(mesh, group_names, channel: dict | None = None) -> Carried:
     weights = group_weights(mesh, len(group_names), channel)
     layers += [Layer(name, "POINT", "FLOAT", weights[:, [g]].copy(), group=True)
                for g, name in enumerate(group_names)]
-    edge_verts = read_edge_verts(mesh)
+    edge_verts = mesh_io.read_edge_verts(mesh)
     uv, render = mesh.uv_layers.active, next((u for u in mesh.uv_layers if u.active_render), None)
     attrs = mesh.attributes
     return Carried(tuple(layers), edge_verts,
                    uv.name if uv is not None else "", render.name if render is not None else "",
                    getattr(attrs, "active_color_name", "") or "",
                    getattr(attrs, "default_color_name", "") or "")
-
-
-def read_edge_verts(mesh) -> np.ndarray:
-    """(E, 2) int32 vertices of each edge (the raw ``.edge_verts`` attribute; edge by edge
-    through ``edges.foreach_get("vertices")`` where a mesh has none)."""
-    n_edges = len(mesh.edges)
-    out = np.empty(2 * n_edges, dtype=np.int32)
-    attr = mesh.attributes.get(".edge_verts")
-    if attr is not None and attr.domain == "EDGE" and attr.data_type == "INT32_2D":
-        attr.data.foreach_get("value", out)
-    else:
-        mesh.edges.foreach_get("vertices", out)
-    return out.reshape(-1, 2)
 
 
 def names_of(mesh, group_names) -> set:

@@ -94,6 +94,15 @@ def _get(collection, name, n, dtype, width=1):
     return buf.reshape(-1, width) if width > 1 else buf
 
 
+def _raw(mesh, name, domain, data_type, n, dtype, width=1):
+    """Blender's raw attribute `name` (one bulk read), or None where the mesh has no
+    attribute of that name, domain and type."""
+    attr = mesh.attributes.get(name)
+    if attr is None or attr.domain != domain or attr.data_type != data_type:
+        return None
+    return _get(attr.data, "value", n, dtype, width)
+
+
 def read_positions(mesh) -> np.ndarray:
     """(V, 3) float32 positions of an evaluated or add-on-owned mesh."""
     return _get(mesh.attributes["position"].data, "vector", len(mesh.vertices), np.float32, 3)
@@ -107,10 +116,9 @@ def read_topology(mesh, with_loops: bool = False):
     the corners, so the sizes are their differences); ``loop_total`` (a second per-face
     read) only for faces not in loop order."""
     n_faces, n_corners = len(mesh.polygons), len(mesh.loops)
-    attr = mesh.attributes.get(".corner_vert")
-    if attr is not None:  # raw attribute read: ~70x faster than loops' vertex_index
-        corners = _get(attr.data, "value", n_corners, np.int32)
-    else:
+    # raw attribute read: ~70x faster than loops' vertex_index
+    corners = _raw(mesh, ".corner_vert", "CORNER", "INT", n_corners, np.int32)
+    if corners is None:
         corners = _get(mesh.loops, "vertex_index", n_corners, np.int32)
     offsets = np.empty(n_faces + 1, dtype=np.int64)
     offsets[:-1] = _get(mesh.polygons, "loop_start", n_faces, np.int32)
@@ -129,10 +137,18 @@ def read_topology(mesh, with_loops: bool = False):
 def read_materials(mesh) -> np.ndarray:
     """(F,) int32 material index of each face (the raw ``material_index`` attribute;
     ``polygons.foreach_get("material_index")`` reads face by face, ~100x slower)."""
-    attr = mesh.attributes.get("material_index")
-    if attr is not None and attr.domain == "FACE" and attr.data_type == "INT":
-        return _get(attr.data, "value", len(mesh.polygons), np.int32)
-    return np.zeros(len(mesh.polygons), dtype=np.int32)  # no attribute: every face 0
+    out = _raw(mesh, "material_index", "FACE", "INT", len(mesh.polygons), np.int32)
+    return np.zeros(len(mesh.polygons), dtype=np.int32) if out is None else out  # none: 0
+
+
+def read_edge_verts(mesh) -> np.ndarray:
+    """(E, 2) int32 vertices of each edge (the raw ``.edge_verts`` attribute; edge by edge
+    through ``edges.foreach_get("vertices")`` where a mesh has none)."""
+    n_edges = len(mesh.edges)
+    out = _raw(mesh, ".edge_verts", "EDGE", "INT32_2D", n_edges, np.int32, 2)
+    if out is None:
+        out = _get(mesh.edges, "vertices", n_edges, np.int32, 2)
+    return out.reshape(-1, 2)
 
 
 def read_mesh(mesh, normals: bool = False, positions=None) -> MeshInput:
