@@ -5,12 +5,12 @@ the vertex's mean normal above ``SPREAD`` degrees: Suzanne's ear rims and mouth 
 the cow's hooves and horns) every data fit of :data:`gerbs_core.mesh.fits.CANDIDATES`
 turns against some star face, and the blend folds there. The extra candidate of such a
 vertex is the pinned degree-4 fit of rings 1-2 (weights 1 / |y|^2, as in
-:mod:`gerbs_core.mesh.fits`) plus sample points of every star face (a lattice of
-resolution ``CAGE_RESOLUTION``, each face weighing the same) whose targets are their
+:mod:`gerbs_core.mesh.fits`) plus sample points of every star triangle and quad (a
+lattice of resolution ``CAGE_RESOLUTION``, each face weighing the same) whose targets are their
 points of the cage face (barycentric / bilinear in the corners), the two groups
 weighted 1 : ``CAGE_WEIGHT``: a quartic that turns with the star's faces. Its targets
 are linear in X and constants give zero coefficients, so the output stays a fixed
-sparse linear function of the positions; it reads ring 1-2 vertices only (the locality
+sparse linear function of the positions; it reads its data rings only (the locality
 of :mod:`gerbs_core.mesh.coupling` holds).
 
 The choice (:mod:`gerbs_core.mesh.agreement`) may take it only where its fold penalty
@@ -83,7 +83,9 @@ def _cage_rows(topo, charts, corners2d, verts, h):
     lo = lat.local_offsets
     slot = np.full(topo.n_vertices, -1)
     slot[verts] = np.arange(len(verts))
-    cs = np.flatnonzero(slot[topo.face_vertices] >= 0)
+    # triangles and quads only: an n-gon's cage point (a fan about its centre) reads all
+    # its corners, and a cap's many samples made the Cylinder's build 4x slower
+    cs = np.flatnonzero((slot[topo.face_vertices] >= 0) & (topo.face_sizes[topo.corner_face] <= 4))
     f = topo.corner_face[cs]
     cnt = lo[f + 1] - lo[f]
     row_c = np.repeat(cs, cnt)
@@ -91,13 +93,13 @@ def _cage_rows(topo, charts, corners2d, verts, h):
     owner = slot[topo.face_vertices[row_c]]
     y = charts.to_chart(row_c, x[idx])[0] / h[verts][owner, None]
     keep = np.hypot(y[:, 0], y[:, 1]) > 1e-9
-    kmax = int(topo.face_sizes.max())
+    kmax = min(4, cw.shape[1])
     fr = topo.corner_face[row_c]
     k = np.arange(kmax)
     tv = topo.face_vertices[np.minimum(topo.face_offsets[fr][:, None] + k,
                                        topo.face_offsets[fr + 1][:, None] - 1)]
     w = 1.0 / np.repeat(cnt, cnt).astype(np.float64)
-    return (owner[keep], y[keep], tv[keep], cw[idx][keep],
+    return (owner[keep], y[keep], tv[keep], cw[idx][keep][:, :kmax],
             _per_owner(w[keep], owner[keep], len(verts)))
 
 
@@ -117,7 +119,8 @@ def spread_candidates(topo, charts, corners2d, rings, X, spread: float = SPREAD)
     oc, yc, tv, tw, wc = _cage_rows(topo, charts, corners2d, verts, rings.h)
     owner = np.concatenate([od, oc])
     y = np.concatenate([yd, yc])
-    w = np.concatenate([wd, CAGE_WEIGHT * wc]) / (1.0 + CAGE_WEIGHT)
+    # 1 : CAGE_WEIGHT, summing to 1 per vertex (a star of n-gons only has no cage rows)
+    w = _per_owner(np.concatenate([wd, CAGE_WEIGHT * wc]), owner, K)
     # targets: row k's is sum_j tval[k, j] X[tcol[k, j]] (a ring vertex, or a cage point)
     tcol = np.concatenate([np.pad(ids[:, None], ((0, 0), (0, tv.shape[1] - 1))), tv])
     tval = np.concatenate([np.pad(np.ones((len(ids), 1)), ((0, 0), (0, tv.shape[1] - 1))), tw])
