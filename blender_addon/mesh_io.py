@@ -47,10 +47,12 @@ class MeshInput:
     carried: object = None  # attributes.Carried
 
     def same_topology(self, other) -> bool:
+        """Same faces (the same arrays: an input with new positions only, stack.read_input)."""
         if other is self:
             return True
-        return (other is not None and np.array_equal(self.offsets, other.offsets)
-                and np.array_equal(self.corners, other.corners))
+        return (other is not None
+                and (self.offsets is other.offsets or np.array_equal(self.offsets, other.offsets))
+                and (self.corners is other.corners or np.array_equal(self.corners, other.corners)))
 
     def same_geometry(self, other) -> bool:
         """Positions, topology and normals equal (bit for bit; NaN never equals): the
@@ -151,6 +153,11 @@ def read_edge_verts(mesh) -> np.ndarray:
     return out.reshape(-1, 2)
 
 
+def read_normals(mesh) -> np.ndarray:
+    """(V, 3) float32 vertex normals of an evaluated or add-on-owned mesh."""
+    return _get(mesh.vertex_normals, "vector", len(mesh.vertices), np.float32, 3)
+
+
 def read_mesh(mesh, normals: bool = False, positions=None) -> MeshInput:
     """Everything a build needs from an evaluated mesh (never the user's original);
     `positions`: (V, 3) float32 to use instead of the mesh's own."""
@@ -158,8 +165,7 @@ def read_mesh(mesh, normals: bool = False, positions=None) -> MeshInput:
     return MeshInput(
         positions=read_positions(mesh) if positions is None else positions,
         offsets=offsets, corners=corners, materials=read_materials(mesh),
-        normals=_get(mesh.vertex_normals, "vector", len(mesh.vertices), np.float32, 3)
-        if normals else None, corner_loops=loops)
+        normals=read_normals(mesh) if normals else None, corner_loops=loops)
 
 
 @contextlib.contextmanager
