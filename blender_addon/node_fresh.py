@@ -218,7 +218,8 @@ def with_groups(t, result, names):
 def channel_tree(t, base, table, names, kept):
     """The input as passed on while no surface is shown: its positions in
     ``ids.CHANNEL_POSITION``, in ``ids.CHANNEL_RECORD`` + k the serial of `table`'s
-    record when `kept` (the input's topology and layers are that record's), else -1, and,
+    record when `kept` (the input's topology and layers are that record's), else -1 and
+    the face sizes in ``ids.CHANNEL_FACE_SIZE`` (a Switch: not computed when kept), and,
     for the vertex-group layers of `table`'s record, their weights in
     ``ids.CHANNEL_WEIGHT`` + i."""
     position = t.node("GeometryNodeInputPosition").outputs[0]
@@ -226,6 +227,10 @@ def channel_tree(t, base, table, names, kept):
     for k, name in enumerate(ids.SERIAL_NAMES):
         serial = t.switch("INT", kept, -1, t.sample(table, name, "INT", "POINT", 0))
         geometry = t.store(geometry, f"{ids.CHANNEL_RECORD}{k}", "INT", "POINT", serial)
+    sizes = t.node("GeometryNodeCornersOfFace")
+    t.link(t.index(), sizes.inputs["Face Index"])
+    geometry = t.switch("GEOMETRY", kept, t.store(geometry, ids.CHANNEL_FACE_SIZE, "INT", "FACE",
+                                                  sizes.outputs["Total"]), geometry)
     return _group_loop(
         t, geometry, table, names,
         target=lambda i, name: t.string_join(ids.CHANNEL_WEIGHT, t.number_string(i)),

@@ -77,7 +77,8 @@ def _read_final(final, groups, normals, known, record):
         reads["positions"] += 1
         return kept
     reads["full"] += 1
-    inp = mesh_io.read_mesh(final, normals, positions)
+    sizes = mesh_io.read_face_ints(final, ids.CHANNEL_FACE_SIZE)  # (none while it names a record)
+    inp = mesh_io.read_mesh(final, normals, positions, sizes)
     channel = _group_channel(known, groups)
     return inp.with_carried(attributes.read_carried(final, groups, channel))
 

@@ -175,20 +175,31 @@ def test_a_move_reads_only_positions_and_writes_the_fresh_result(blender):
     bpy.ops.object.mode_set(mode="OBJECT")
 
 
-def test_edits_other_than_positions_are_read_in_full(blender):
+def test_edits_other_than_positions_are_read_in_full(blender, monkeypatch):
     """What the channel must not call "positions only": an edge rotation (same counts of
-    everything, other faces: a rebuild of the new faces) and a UV edit (a carried layer:
+    everything, other faces: a rebuild of the new faces; the face sizes come from the
+    channel, not from Blender's per-face loop_start) and a UV edit (a carried layer:
     mapped again, no rebuild)."""
     from gerbs_core import BlendingSurface
 
+    from blender_addon import mesh_io
+
     obj, mod, bm, X, P0 = _edit()
     before, rebuilt = _reads(), _statuses().get("rebuilt", 0)
+    per_face, inner = [], mesh_io._get
+
+    def counted(collection, name, *args):
+        per_face.append(name)
+        return inner(collection, name, *args)
+
+    monkeypatch.setattr(mesh_io, "_get", counted)
     bm.edges.ensure_lookup_table()
     assert bmesh.ops.rotate_edges(bm, edges=[bm.edges[10]], use_ccw=False)["edges"]
     bm.faces.index_update()
     bm.faces.ensure_lookup_table()
     P = _update(obj)
     assert _more(before, _reads()) == {"full": 1, "positions": 0}
+    assert "value" in per_face and "loop_start" not in per_face  # read, but not per face
     assert _statuses().get("rebuilt", 0) == rebuilt + 1
     X_new, faces = _bm_mesh(bm)
     assert len(faces) == 80 and len(bm.edges) == 120  # the counts are the icosphere's
