@@ -38,6 +38,8 @@ from ..splines.evaluate import blend_jet, rising_jet
 
 __all__ = ["PlanarStarCover", "cross2d", "signed_angle"]
 
+_FIT_CHUNK = 1 << 16     # corners per width fit (its ~20 temporaries then stay in cache)
+
 
 def cross2d(a, b):
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
@@ -113,8 +115,12 @@ class PlanarStarCover:
         roomB = self.delta[f] * np.where(self.next_edge[f] >= 0, 0.5, 1.0)
         self.c = adaptive_scales(E, e, f, nA, self.p[e], nB, self.p[f], roomA, roomB,
                                  self.kappa, self.kernel)
-        wa, wb, ok, _, _ = fit_blend_widths(nA, self.p[e], self.c[e], nB, self.p[f], self.c[f],
-                                            roomA, roomB, self.kappa, self.kernel)
+        wa, wb, ok = np.empty(len(e)), np.empty(len(e)), np.empty(len(e), bool)
+        for s in range(0, len(e), _FIT_CHUNK):      # per corner: chunks only keep it in cache
+            k, ek, fk = slice(s, s + _FIT_CHUNK), e[s:s + _FIT_CHUNK], f[s:s + _FIT_CHUNK]
+            wa[k], wb[k], ok[k], _, _ = fit_blend_widths(
+                nA[k], self.p[ek], self.c[ek], nB[k], self.p[fk], self.c[fk], roomA[k], roomB[k],
+                self.kappa, self.kernel)
         if not ok.all():
             raise InvalidPointSetError(
                 "no certified smooth gauge at a corner of these stars (degenerate polygon); "
