@@ -218,21 +218,34 @@ class PlanarStarCover:
         h = np.zeros((M, K, 2, 2)) if nu >= 2 else None
         if not valid.any():
             return v, g, h
-        rows, cols = np.nonzero(valid)
-        e = edge[rows, cols]
-        y = x[rows] - self.centers[self.edge_star[e]]
-        r_jet, t_jet = polar_jet(y, nu)
+        if valid.all():          # (Delaunay candidates inside the hull): no gather/scatter
+            e = edge.reshape(-1)
+            y = (x[:, None, :] - self.centers[self.edge_star[edge]]).reshape(-1, 2)
+            put = (slice(None),)
+            v, g, h = (a.reshape((-1,) + a.shape[2:]) if a is not None else None for a in (v, g, h))
+        else:
+            rows, cols = np.nonzero(valid)
+            e = edge[rows, cols]
+            y = x[rows] - self.centers[self.edge_star[e]]
+            put = (rows, cols)
+        if nu >= 1:
+            r_jet, t_jet = polar_jet(y, nu)
+        else:                    # values: the edge angle below is the only angle needed
+            r_jet, t_jet = [np.hypot(y[..., 0], y[..., 1])], [None]
         r = r_jet[0]
-        t = np.arctan2(cross2d(self.a0[e], y), np.sum(self.a0[e] * y, -1))
+        a0 = self.a0[e]
+        t = np.arctan2(cross2d(a0, y), np.sum(a0 * y, -1))
         t = np.where(r > 0, t, 0.0)
         inside = (t >= -1e-12) & (t <= self.delta[e] + 1e-12)
         t_jet[0] = np.clip(t, 0.0, self.delta[e])      # the edge's angle: theta - const
         jet = bump_jet(self.kernel, star_gauge_jet(r_jet, t_jet, self.u_tilde(e, t_jet[0], nu),
                                                    nu), nu)
-        v[rows, cols] = np.where(inside, jet[0], 0.0)
+        v[put] = np.where(inside, jet[0], 0.0)
         live = inside & (r > 0)      # (beyond g = 1 the bump's derivatives are exactly 0)
         if nu >= 1:
-            g[rows, cols] = np.where(live[:, None], jet[1], 0.0)
+            g[put] = np.where(live[:, None], jet[1], 0.0)
         if nu >= 2:
-            h[rows, cols] = np.where(live[:, None, None], jet[2], 0.0)
+            h[put] = np.where(live[:, None, None], jet[2], 0.0)
+        if len(put) == 1:
+            v, g, h = (a.reshape((M, K) + a.shape[1:]) if a is not None else None for a in (v, g, h))
         return v, g, h
