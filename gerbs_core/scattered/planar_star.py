@@ -127,6 +127,8 @@ class PlanarStarCover:
                 "offending points", np.unique(self.edge_star[e[~ok]]))
         self.R, self.L = np.zeros(E), np.zeros(E)
         self.R[e], self.L[f] = wa, wb
+        # the amplitude 1 / (shrink c p) of each edge's pulled-in line, once per edge
+        self._line_scale = 1.0 / (self.shrink * self.c * self.p)
         # rho is convex on each edge: its max is at a corner, and rho~ <= rho
         self.support_radius = np.zeros(len(self.centers))
         np.maximum.at(self.support_radius, self.edge_star, self.shrink * self._corner_r)
@@ -158,18 +160,20 @@ class PlanarStarCover:
         if self.exact:
             return line_jet(1.0 / (self.shrink * self.p[e]), self.nu[e], None, t, nu)
         g, f = self.prev_edge[e], self.next_edge[e]
-        left = (g >= 0) & (t < self.L[e])
-        right = (f >= 0) & (t > self.delta[e] - self.R[e]) & ~left
+        Le, Re, de = self.L[e], self.R[e], self.delta[e]       # each gathered once
+        left = (g >= 0) & (t < Le)
+        right = (f >= 0) & (t > de - Re) & ~left
         ia, ib = np.where(left, g, e), np.where(right, f, e)
+        Ra = self.R[ia]
         ta = np.where(left, t + self.delta[ia], t)
-        tb = np.where(right, t - self.delta[e], t)
-        width = np.where(left, self.R[ia] + self.L[e], np.where(right, self.R[e] + self.L[ib], 1.0))
-        w = np.where(left, (t + self.R[ia]) / width,
-                     np.where(right, (t - self.delta[e] + self.R[e]) / width, 0.0))
+        tb = np.where(right, t - de, t)
+        width = np.where(left, Ra + Le, np.where(right, Re + self.L[ib], 1.0))
+        w = np.where(left, (t + Ra) / width,
+                     np.where(right, (t - de + Re) / width, 0.0))
         rise = rising_jet(self.kernel, np.clip(w, 0.0, 1.0), width, nu)
         rise = np.where(left | right, rise, 0.0)
-        A = line_jet(1.0 / (self.shrink * self.c[ia] * self.p[ia]), self.nu[ia], None, ta, nu)
-        B = line_jet(1.0 / (self.shrink * self.c[ib] * self.p[ib]), self.nu[ib], None, tb, nu)
+        A = line_jet(self._line_scale[ia], self.nu[ia], None, ta, nu)
+        B = line_jet(self._line_scale[ib], self.nu[ib], None, tb, nu)
         return blend_jet(A, B, rise, nu)
 
     def rho_tilde(self, e, t, nu=0):
