@@ -193,7 +193,8 @@ def _fit_chunk(points, D_known, rows, nb, h, alphas, fit_degree):
     G = np.matmul(AWt, np.swapaxes(At, 1, 2))
     M = G.shape[1]
     tr = np.trace(G, axis1=1, axis2=2)
-    G += (1e-12 * tr / M)[:, None, None] * np.eye(M)
+    diag = G.reshape(len(G), M * M)[:, :: M + 1]      # a view of the diagonals
+    diag += (1e-12 * tr / M)[:, None]
     return np.linalg.solve(G, np.matmul(AWt, B))                           # (c, M, V)
 
 
