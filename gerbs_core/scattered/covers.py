@@ -110,7 +110,8 @@ def _corner_in(s, tri_idx, vertex):
     """Edge index 3 t + k of the corner of triangle ``tri_idx`` at ``vertex`` (-1 if none)."""
     ok = tri_idx >= 0
     t = np.where(ok, tri_idx, 0)
-    k = np.argmax(s[t] == vertex[:, None], axis=1)
+    st = s[t]                     # the corner holding vertex (0 if none, as argmax)
+    k = np.where(st[:, 1] == vertex, 1, 0) + np.where(st[:, 2] == vertex, 2, 0)
     return np.where(ok, 3 * t + k, -1)
 
 

@@ -45,9 +45,20 @@ def cross2d(a, b):
     return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
 
 
+def dot2(a, b):
+    """a . b over the last axis (..., 2): np.sum(a * b, -1) to the bit, 4x faster. (The
+    + 0.0 keeps its +0.0 for (-0.0) + (-0.0): the sign of a zero decides arctan2.)"""
+    return (a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]) + 0.0
+
+
+def norm2(a):
+    """|a| over the last axis (..., 2), np.linalg.norm to the bit (5x faster)."""
+    return np.sqrt(a[..., 0] * a[..., 0] + a[..., 1] * a[..., 1])
+
+
 def signed_angle(a, b):
     """Signed angle from a to b in (-pi, pi]."""
-    return np.arctan2(cross2d(a, b), np.sum(a * b, axis=-1))
+    return np.arctan2(cross2d(a, b), dot2(a, b))
 
 
 class PlanarStarCover:
@@ -78,7 +89,7 @@ class PlanarStarCover:
         c = centers[self.edge_star]
         a0, a1 = q0 - c, q1 - c
         self.a0, self.a1 = a0, a1
-        self._corner_r = np.maximum(np.linalg.norm(a0, axis=1), np.linalg.norm(a1, axis=1))
+        self._corner_r = np.maximum(norm2(a0), norm2(a1))
         self.delta = signed_angle(a0, a1)
         bad = np.flatnonzero(~(self.delta > 1e-12) | ~(self.delta < np.pi - 1e-12))
         if bad.size:
@@ -86,8 +97,8 @@ class PlanarStarCover:
                 "cover polygons are not star-shaped w.r.t. their points (edge seen under an angle "
                 "outside (0, pi)); offending points", np.unique(self.edge_star[bad]))
         e = q1 - q0
-        self.p = cross2d(a0, a1) / np.linalg.norm(e, axis=-1)
-        t = -np.sum(a0 * e, -1) / np.sum(e * e, -1)
+        self.p = cross2d(a0, a1) / norm2(e)
+        t = -dot2(a0, e) / dot2(e, e)
         foot = a0 + t[:, None] * e
         self.nu = signed_angle(a0, foot)
         self._subdivide()
@@ -238,7 +249,7 @@ class PlanarStarCover:
             r_jet, t_jet = [np.hypot(y[..., 0], y[..., 1])], [None]
         r = r_jet[0]
         a0 = self.a0[e]
-        t = np.arctan2(cross2d(a0, y), np.sum(a0 * y, -1))
+        t = np.arctan2(cross2d(a0, y), dot2(a0, y))
         t = np.where(r > 0, t, 0.0)
         inside = (t >= -1e-12) & (t <= self.delta[e] + 1e-12)
         t_jet[0] = np.clip(t, 0.0, self.delta[e])      # the edge's angle: theta - const
