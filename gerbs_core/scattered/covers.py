@@ -103,7 +103,11 @@ def _set_transforms(tri, points):
         bad = ~(1.0 / (norm_t * norm_i) >= np.finfo(float).eps)
     out[:, 2] = r
     out[bad] = np.nan
-    tri._transform = out          # scipy's cache of the property ``transform``
+    # scipy's cache of the property ``transform`` (a private attribute, None until the
+    # first find_simplex; tests/core/test_covers.py compares with scipy's own): filled
+    # only where this scipy has it empty, else scipy builds it as before
+    if getattr(tri, "_transform", 0) is None:
+        tri._transform = out
 
 
 def _corner_in(s, tri_idx, vertex):

@@ -242,6 +242,7 @@ def test_vectorized_barycentric_transforms_match_scipy():
     rng = np.random.default_rng(4)
     P = np.concatenate([rng.random((400, 2)), 0.5 + 1e-3 * rng.normal(size=(200, 2))])
     tri = delaunay_triangulation(P)[0]
+    assert tri._transform is not None      # filled before any find_simplex (this scipy)
     ref = Delaunay(P).transform
     scale = np.abs(ref).max(axis=(1, 2), keepdims=True)
     assert np.max(np.abs(tri.transform - ref) / scale) < 1e-12
@@ -250,6 +251,7 @@ def test_vectorized_barycentric_transforms_match_scipy():
 
     class Flat:                   # a zero-area triangle among good ones
         simplices = np.array([[0, 1, 2], [0, 1, 3]])
+        _transform = None
     pts = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [0.0, 1.0]])
     _set_transforms(Flat, pts)
     assert np.isnan(Flat._transform[0]).all() and np.isfinite(Flat._transform[1]).all()
