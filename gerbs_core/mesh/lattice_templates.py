@@ -216,12 +216,12 @@ def obtuse_flips(topology, angles, threshold: float | None = None) -> np.ndarray
 
 
 def variant_rows(variants: np.ndarray):
-    """[(rows, variant)] of a size class's faces (``variants`` (nf,)): one slice of all
-    of them when they share one variant, else the index arrays of each variant."""
+    """[(rows, variant)] of a size class's faces (``variants`` (nf,)), to be written in
+    order: all of them (a slice) as variant -1 first, then the index arrays of each other
+    variant present, overwriting theirs (few faces are flipped: the bulk stays one block)."""
     v = np.asarray(variants)
-    if not len(v) or (v == v[0]).all():
-        return [(slice(None), int(v[0]) if len(v) else -1)]
-    return [(np.flatnonzero(v == u), int(u)) for u in np.unique(v).tolist()]
+    return [(slice(None), -1)] + [(np.flatnonzero(v == u), int(u))
+                                  for u in np.unique(v[v >= 0]).tolist()]
 
 
 @lru_cache(maxsize=64)

@@ -3,7 +3,7 @@
 (``--variant scripts/shape/proto/flip.py:off,...``; ``off`` = no face flipped, the former
 output), and the fold counts side by side on one build per mesh:
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/shape/proto/flip.py [cow suzanne ...]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/shape/proto/flip.py [cow suzanne ...] [--r 16]
 
 prints, per mesh and threshold, the output pairs above 60 / 90 degrees, the largest, the
 faces flipped and the largest output triangle angle (3D)."""
@@ -49,10 +49,9 @@ def largest_angles(P, T):
     return np.max(out, axis=0)
 
 
-def main(names):
+def main(names, r=8):
     from gerbs_core import BlendingSurface
     from shape.folds import fold_sites, load
-    r = 8
     for name in names:
         V, F = load(name)
         s = BlendingSurface(V, F)
@@ -62,11 +61,13 @@ def main(names):
                 lat = s.lattice(r)
                 P, T, _ = s.tessellate(r)
             a = np.array([x[0] for x in sites] or [0.0])
-            print(f"{name} flip>{t:.0f}: pairs>60 {len(sites)}, >90 {int((a > 90).sum())}, "
+            print(f"{name} r={r} flip>{t:.0f}: pairs>60 {len(sites)}, >90 {int((a > 90).sum())}, "
                   f"largest {a.max():.1f}; faces flipped {int((lat.flip >= 0).sum())} of "
                   f"{len(lat.flip)}; output angle max {largest_angles(P, T).max():.1f}",
                   flush=True)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:] or ["suzanne", "cow"])
+    args = sys.argv[1:]
+    r = int(args.pop(args.index("--r") + 1)) if "--r" in args else 8
+    main([a for a in args if a != "--r"] or ["suzanne", "cow"], r)
