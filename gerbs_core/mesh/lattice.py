@@ -118,7 +118,7 @@ def _face_tables(classes, F: int, tcount, T: int, r: int, flip: np.ndarray):
 
     The per-class tables are merged by offsets (each face is in exactly one class, in
     template order): scatters, no sort. A class's faces of another triangulation
-    (``flip`` (F,), the variant of :func:`template_tris`) are written separately."""
+    (``flip`` (F,), the variant of :func:`template_tris`) overwrite its block."""
     npts = np.zeros(F, dtype=np.int64)
     for fk, G, _, _ in classes:
         npts[fk] = G.shape[1]

@@ -78,7 +78,6 @@ def _class_edges(lat, part, cnt: int, base: int, quads: bool, ev: np.ndarray):
     nf = len(fk0)
     ni = cnt // max(nf, 1)
     ev_c = ev[base:base + cnt].reshape(nf, 2 * ni)
-    ce = None
     for rows, v in variant_rows(lat.flip[fk0]):
         fk, G = fk0[rows], G0[rows]
         tedge, face_edge, side, seg = template_edges(n, r, quads, v)
@@ -89,15 +88,12 @@ def _class_edges(lat, part, cnt: int, base: int, quads: bool, ev: np.ndarray):
         e = tp.halfedge_edge[h]
         m = seg[ni:][None, :]
         ids[:, ni:] = e * r + np.where(fv[h] == tp.edges[e, 0], m, r - 1 - m)
-        if isinstance(rows, slice):
-            np.take(G.astype(i32), tedge[:ni].ravel(), axis=1, mode="clip", out=ev_c)
-        else:
-            ev_c[rows] = G[:, tedge[:ni].ravel()]
         got = np.take(ids, face_edge.ravel(), axis=1)
-        if isinstance(rows, slice):
+        if isinstance(rows, slice):  # the whole class first (variant_rows)
+            np.take(G.astype(i32), tedge[:ni].ravel(), axis=1, mode="clip", out=ev_c)
             ce = got
         else:
-            ce = np.empty((nf, got.shape[1]), dtype=i32) if ce is None else ce
+            ev_c[rows] = G[:, tedge[:ni].ravel()]
             ce[rows] = got
     return base + ni * np.arange(nf), ce
 
