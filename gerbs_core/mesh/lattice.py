@@ -38,7 +38,8 @@ import numpy as np
 from ..errors import InvalidParameterError, ResourceLimitError
 from .arrays import read_only as _ro
 from .lattice_faces import output_edges, polygon_table
-from .lattice_templates import CORNER, EDGE, INTERIOR, face_counts, template
+from .lattice_templates import (CORNER, EDGE, INTERIOR, face_counts, template, template_tris,
+                                variant_rows)
 from .polygon_map import corner_weights, map_to_polygon
 
 __all__ = ["Lattice", "SizeClass", "output_counts"]
@@ -112,11 +113,12 @@ def _size_class(tp, r: int, n: int, block, owner_corner, first_he) -> SizeClass:
     return SizeClass(fk, G, own, n)
 
 
-def _face_tables(classes, F: int, tcount, T: int, r: int):
+def _face_tables(classes, F: int, tcount, T: int, r: int, flip: np.ndarray):
     """(local_sample (L,), local_offsets (F+1,), triangles (T, 3)) in face order.
 
     The per-class tables are merged by offsets (each face is in exactly one class, in
-    template order): scatters, no sort."""
+    template order): scatters, no sort. A class's faces of another triangulation
+    (``flip`` (F,), the variant of :func:`template_tris`) overwrite its block."""
     npts = np.zeros(F, dtype=np.int64)
     for fk, G, _, _ in classes:
         npts[fk] = G.shape[1]
@@ -127,16 +129,32 @@ def _face_tables(classes, F: int, tcount, T: int, r: int):
     local_sample = np.empty(int(loff[-1]), dtype=np.int64)
     tri = np.empty((T, 3), dtype=np.int64)
     for fk, G, own, n in classes:
-        tris = template(n, r)[6]
-        npt, nt_ = G.shape[1], len(tris)
+        npt = G.shape[1]
         if len(classes) == 1:
             local_sample[:] = G.ravel()
-            tri[:] = G[:, tris].reshape(-1, 3)
         else:
             local_sample[(loff[fk][:, None] + np.arange(npt)).ravel()] = G.ravel()
-            dest = (toff[fk][:, None] + np.arange(nt_)).ravel()
-            _scatter_rows(tri, dest, G[:, tris].reshape(-1, 3))
+        for rows, v in variant_rows(flip[fk]):
+            tris = template_tris(n, r, v)
+            if len(classes) == 1 and isinstance(rows, slice):
+                tri[:] = G[:, tris].reshape(-1, 3)
+            else:
+                dest = (toff[fk[rows]][:, None] + np.arange(len(tris))).ravel()
+                _scatter_rows(tri, dest, G[rows][:, tris].reshape(-1, 3))
     return local_sample, loff, tri
+
+
+def _check_flip(flip, sizes) -> np.ndarray:
+    """(F,) int64 read-only variants: -1 everywhere (None) or ``flip`` checked (a triangle's
+    corner 0..2 or -1; -1 for every other face)."""
+    if flip is None:
+        return _ro(np.full(len(sizes), -1, dtype=np.int64))
+    f = np.asarray(flip)
+    if f.shape != (len(sizes),) or f.dtype.kind not in "iu" or (f < -1).any() \
+            or (f > np.where(sizes == 3, 2, -1)).any():
+        raise InvalidParameterError("flip", f"must be (F,) = ({len(sizes)},) integers: a "
+                                    f"triangle's obtuse corner 0..2 or -1")
+    return _ro(f.astype(np.int64))
 
 
 class Lattice:
@@ -152,11 +170,16 @@ class Lattice:
       ``local_face, local_fan, local_uv, local_sample (L,)``: every lattice point of every
       face (shared points once per incident face), sorted by face, CSR ``local_offsets (F+1,)``
       ``size_classes``: a :class:`SizeClass` per face size, ascending
+      ``flip (F,)``: each face's triangulation: -1 the lattice's own, k = 0..2 (triangles)
+      :func:`~.lattice_templates.flipped_triangles` for an obtuse corner k (the same
+      samples; only the triangles, :meth:`polygons` and :meth:`edges` inside the face differ)
 
     ``max_points``: refuse (ResourceLimitError, stating the estimate) if P would exceed it.
+    ``flip``: (F,) the variants (default all -1; :func:`~.lattice_templates.obtuse_flips`).
     """
 
-    def __init__(self, topology, resolution: int, max_points: int | None = None):
+    def __init__(self, topology, resolution: int, max_points: int | None = None,
+                 flip=None):
         r = _check_resolution(resolution)
         P, T = output_counts(topology, r)
         if max_points is not None and P > max_points:
@@ -164,6 +187,7 @@ class Lattice:
                                      f"than max_points={max_points}")
         tp = topology
         V, E, F = tp.n_vertices, tp.n_edges, tp.n_faces
+        self.flip = _check_flip(flip, np.asarray(tp.face_sizes))
         inner, tcount = face_counts(tp.face_sizes, r)
         block = V + E * (r - 1) + np.concatenate([[0], np.cumsum(inner)[:-1]])
         owner_corner = tp.star_corners[tp.star_offsets[:-1]]
@@ -172,7 +196,7 @@ class Lattice:
         face_g = np.empty(P, dtype=np.int64)
         for fk, G, own, _ in classes:
             face_g[G[own]] = np.broadcast_to(fk[:, None], G.shape)[own]
-        local_sample, loff, tri = _face_tables(classes, F, tcount, T, r)
+        local_sample, loff, tri = _face_tables(classes, F, tcount, T, r, self.flip)
         self.size_classes = classes
         self.local_sample = _ro(local_sample)
         self.local_offsets = _ro(loff)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arrays import read_only as _ro
-from .lattice_templates import face_counts, template_edges, template_faces
+from .lattice_templates import face_counts, template_edges, template_faces, variant_rows
 
 __all__ = ["corner_counts", "polygon_table", "output_edges"]
 
@@ -38,12 +38,13 @@ def polygon_table(lat, quads: bool):
     corners = np.empty(int(coff[-1]), dtype=np.int64)
     local = np.empty(int(coff[-1]), dtype=np.int64)
     sizes = np.empty(int(foff[-1]), dtype=np.int64)
-    for fk, G, _, n in lat.size_classes:
-        tf = template_faces(n, r, quads)
-        dest = (coff[fk][:, None] + np.arange(tf.size)).ravel()
-        corners[dest] = G[:, tf.ravel()].ravel()
-        local[dest] = (lat.local_offsets[fk][:, None] + tf.ravel()).ravel()
-        sizes[(foff[fk][:, None] + np.arange(len(tf))).ravel()] = tf.shape[1]
+    for fk0, G0, _, n in lat.size_classes:
+        for rows, v in variant_rows(lat.flip[fk0]):
+            fk, G, tf = fk0[rows], G0[rows], template_faces(n, r, quads, v)
+            dest = (coff[fk][:, None] + np.arange(tf.size)).ravel()
+            corners[dest] = G[:, tf.ravel()].ravel()
+            local[dest] = (lat.local_offsets[fk][:, None] + tf.ravel()).ravel()
+            sizes[(foff[fk][:, None] + np.arange(len(tf))).ravel()] = tf.shape[1]
     face = np.repeat(np.arange(tp.n_faces, dtype=np.int64), fcount)
     return _ro(_offsets(sizes)), _ro(corners), _ro(face), _ro(local)
 
@@ -68,21 +69,33 @@ def _mesh_edge_segments(tp, r: int, ev: np.ndarray) -> None:
 def _class_edges(lat, part, cnt: int, base: int, quads: bool, ev: np.ndarray):
     """Edges of one size class: writes its ``cnt`` inner edges into ``ev[base:]`` and
     returns (first inner edge of each face (nf,), edge of every corner of its template
-    faces (nf, corners))."""
+    faces (nf, corners)). Faces of another triangulation (``lat.flip``) have as many
+    inner edges (any triangulation of the same points and sides has), numbered in the
+    same place, between other points."""
     tp, r, i32 = lat.topology, lat.resolution, np.int32
     fo, fv = tp.face_offsets, tp.face_vertices
-    fk, G, _, n = part
-    tedge, face_edge, side, seg = template_edges(n, r, quads)
-    ni = cnt // max(len(fk), 1)
-    ids = np.empty((len(fk), len(tedge)), dtype=i32)
-    ids[:, :ni] = base + np.arange(cnt, dtype=i32).reshape(len(fk), ni)
-    h = fo[fk][:, None] + side[ni:][None, :]  # half-edge of the side
-    e = tp.halfedge_edge[h]
-    m = seg[ni:][None, :]
-    ids[:, ni:] = e * r + np.where(fv[h] == tp.edges[e, 0], m, r - 1 - m)
-    np.take(G.astype(i32), tedge[:ni].ravel(), axis=1, mode="clip",
-            out=ev[base:base + cnt].reshape(len(fk), 2 * ni))
-    return base + ni * np.arange(len(fk)), np.take(ids, face_edge.ravel(), axis=1)
+    fk0, G0, _, n = part
+    nf = len(fk0)
+    ni = cnt // max(nf, 1)
+    ev_c = ev[base:base + cnt].reshape(nf, 2 * ni)
+    for rows, v in variant_rows(lat.flip[fk0]):
+        fk, G = fk0[rows], G0[rows]
+        tedge, face_edge, side, seg = template_edges(n, r, quads, v)
+        ids = np.empty((len(fk), len(tedge)), dtype=i32)
+        ids[:, :ni] = base + ni * np.arange(nf, dtype=i32)[rows][:, None] + np.arange(ni,
+                                                                                  dtype=i32)
+        h = fo[fk][:, None] + side[ni:][None, :]  # half-edge of the side
+        e = tp.halfedge_edge[h]
+        m = seg[ni:][None, :]
+        ids[:, ni:] = e * r + np.where(fv[h] == tp.edges[e, 0], m, r - 1 - m)
+        got = np.take(ids, face_edge.ravel(), axis=1)
+        if isinstance(rows, slice):  # the whole class first (variant_rows)
+            np.take(G.astype(i32), tedge[:ni].ravel(), axis=1, mode="clip", out=ev_c)
+            ce = got
+        else:
+            ev_c[rows] = G[:, tedge[:ni].ravel()]
+            ce[rows] = got
+    return base + ni * np.arange(nf), ce
 
 
 def _merge_repeats(lat, quads: bool, ev, ce, inner_of):

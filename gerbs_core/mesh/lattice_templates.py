@@ -7,6 +7,12 @@ Each template point carries its parameters in the face and its kind: a corner, a
 point inside a side (corner k -> k+1) at position m = 1..r-1 from corner k, or an
 interior point. :class:`~gerbs_core.mesh.lattice.Lattice` maps these to the global
 samples, so points on shared vertices and edges are stored once.
+
+Obtuse triangles get another triangulation of the same points (a *variant* k = the
+obtuse corner, -1 the standard one; :func:`flipped_triangles`): every lattice triangle
+is similar to its face, so a face with a 164-degree corner would give r^2 slivers, and
+the corner triangle at the obtuse vertex spans ~180 degrees of that vertex's chart (its
+image is degenerate whatever the surface; docs/design.md, stage 9).
 """
 from __future__ import annotations
 
@@ -14,10 +20,15 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["CORNER", "EDGE", "INTERIOR", "face_counts", "template", "template_faces",
-           "template_edges"]
+__all__ = ["CORNER", "EDGE", "INTERIOR", "FLIP_ANGLE", "face_counts", "template",
+           "template_faces", "template_edges", "template_tris", "flipped_triangles",
+           "obtuse_flips", "variant_rows"]
 
 CORNER, EDGE, INTERIOR = 0, 1, 2
+
+# triangles with a layout corner above this (degrees) are triangulated by
+# flipped_triangles (docs/design.md, stage 9: measured 110 / 120 / 135)
+FLIP_ANGLE = 120.0
 
 
 def face_counts(sizes: np.ndarray, r: int):
@@ -147,12 +158,79 @@ def template(n: int, r: int):
     return out
 
 
+def flipped_triangles(r: int, k: int) -> np.ndarray:
+    """The barycentric lattice of :func:`template` (3, r) triangulated for an obtuse corner
+    k: (r^2, 3) counter-clockwise triangles in template indices.
+
+    Every down triangle is paired with the up triangle across its edge parallel to the
+    side opposite corner k, and the parallelogram is split along its other diagonal (the
+    one pointing at corner k); the r up triangles along that side stay. Written for
+    k = 0 in coordinates (a, b) = (l_{k+1}, l_{k+2}) r (a cyclic relabelling of the
+    corners, which keeps the orientation): cell (a, b) gives (a, b), (a+1, b), (a+1, b+1)
+    and (a, b), (a+1, b+1), (a, b+1). The corner triangle (k, p, q) becomes (k, p, c),
+    (k, c, q) with c = p + q - k, on the bisector: at (164, 8, 8) degrees the new
+    triangles have angles about (16, 82, 82) instead of the face's."""
+    i, j = _barycentric(r)[:2]
+    lut = np.full((r + 1, r + 1), -1, dtype=np.int64)
+    lut[i, j] = np.arange(len(i))
+    ab = np.array([(a, b) for b in range(r) for a in range(r - b)], dtype=np.int64)
+    a, b = ab[:, 0], ab[:, 1]
+    c = a + b < r - 1  # the cells; the others are the up triangles along the side
+
+    def tri(*pts):
+        return np.stack([np.stack(p, -1) for p in pts], 1)  # (t, 3 corners, (a, b))
+    tris = np.concatenate([tri((a, b), (a + 1, b), (a + c, b + 1)),  # cell or up triangle
+                           tri((a[c], b[c]), (a[c] + 1, b[c] + 1), (a[c], b[c] + 1))])
+    l_rot = np.concatenate([(r - tris.sum(-1))[..., None], tris], -1)  # (l_k, l_k+1, l_k+2)
+    l = np.roll(l_rot, k, axis=-1)  # l[..., m] = l_rot[..., (m - k) % 3]
+    return lut[l[..., 1], l[..., 2]]
+
+
 @lru_cache(maxsize=64)
-def template_faces(n: int, r: int, quads: bool = False) -> np.ndarray:
+def template_tris(n: int, r: int, variant: int = -1) -> np.ndarray:
+    """The template's triangles (read-only (r^2 n', 3)): ``template(n, r)`` 's for variant
+    -1, :func:`flipped_triangles` (r, variant) for a triangle's variant 0..2."""
+    if variant < 0:
+        return template(n, r)[6]
+    if n != 3 or variant > 2:
+        raise ValueError(f"variant {variant} of an {n}-gon: only triangles have 0..2")
+    out = flipped_triangles(r, variant)
+    out.flags.writeable = False
+    return out
+
+
+def obtuse_flips(topology, angles, threshold: float | None = None) -> np.ndarray:
+    """(F,) int64 variant of every face: its largest corner k (0..2) for triangles whose
+    layout angle there (``angles`` (C,) radians, :class:`~.layout.FaceLayouts`) exceeds
+    ``threshold`` degrees (default :data:`FLIP_ANGLE`), else -1."""
+    t = np.deg2rad(FLIP_ANGLE if threshold is None else threshold)
+    sizes = np.asarray(topology.face_sizes)
+    out = np.full(len(sizes), -1, dtype=np.int64)
+    tri = np.flatnonzero(sizes == 3)
+    if len(tri):
+        a = np.asarray(angles)[topology.face_offsets[tri][:, None] + np.arange(3)]
+        k = np.argmax(a, axis=1)
+        big = a[np.arange(len(tri)), k] > t
+        out[tri[big]] = k[big]
+    return out
+
+
+def variant_rows(variants: np.ndarray):
+    """[(rows, variant)] of a size class's faces (``variants`` (nf,)), to be written in
+    order: all of them (a slice) as variant -1 first, then the index arrays of each other
+    variant present, overwriting theirs (few faces are flipped: the bulk stays one block)."""
+    v = np.asarray(variants)
+    return [(slice(None), -1)] + [(np.flatnonzero(v == u), int(u))
+                                  for u in np.unique(v[v >= 0]).tolist()]
+
+
+@lru_cache(maxsize=64)
+def template_faces(n: int, r: int, quads: bool = False, variant: int = -1) -> np.ndarray:
     """Output faces of an n-gon template in template indices (read-only (k, m) array):
     with `quads` a quad's r x r cells (m = 4; cell (i, j) -> (i+1, j) -> (i+1, j+1) ->
-    (i, j+1), counter-clockwise like the face), else the lattice triangles (m = 3)."""
-    tris = template(n, r)[6]
+    (i, j+1), counter-clockwise like the face), else the lattice triangles (m = 3) of
+    the `variant` (:func:`template_tris`)."""
+    tris = template_tris(n, r, variant)
     if not (quads and n == 4):
         return tris
     c = r * r  # the triangles of a quad are (a, b, c) for every cell, then (a, c, d)
@@ -180,7 +258,7 @@ def _side_segments(tedge, kind, loc, pos, n: int, r: int):
 
 
 @lru_cache(maxsize=64)
-def template_edges(n: int, r: int, quads: bool = False):
+def template_edges(n: int, r: int, quads: bool = False, variant: int = -1):
     """Edges of the output faces of an n-gon template (:func:`template_faces`; read-only).
 
     Returns (tedge (te, 2), face_edge (k, m), side (te,), seg (te,)): the distinct
@@ -191,7 +269,7 @@ def template_edges(n: int, r: int, quads: bool = False):
     -1 for edges inside the polygon (these come first).
     """
     uv, fan, kind, loc, pos, canon, _ = template(n, r)
-    tris = template_faces(n, r, quads)
+    tris = template_faces(n, r, quads, variant)
     npt = len(kind)
     _, first, inv = np.unique(np.stack([kind, loc, pos], 1), axis=0, return_index=True,
                               return_inverse=True)

@@ -30,6 +30,7 @@ from .cover import require_cover, star_cover
 from .crease_surface import build_model, crease_input, first_occurrence, merge_tessellation
 from .evaluate import evaluate, partition_at
 from .lattice import Lattice, output_counts
+from .lattice_templates import obtuse_flips
 from .layout import face_layouts
 from .memory import memory_estimate
 from .monomials import monomials
@@ -302,14 +303,16 @@ class BlendingSurface:
         return memory_estimate(self.model, resolution)
 
     def lattice(self, resolution: int):
-        """The sample lattice at `resolution` (checked against the memory budget)."""
+        """The sample lattice at `resolution` (checked against the memory budget); triangles
+        with a layout corner above ``lattice_templates.FLIP_ANGLE`` triangulated for it."""
         P, _ = output_counts(self.topology, resolution)
         est = self.memory_estimate(resolution)
         if est > self.memory_budget:
             raise ResourceLimitError(f"resolution {resolution}: {P} points, estimated memory "
                                      f"{est / 1e6:.0f} MB exceeds the budget "
                                      f"{self.memory_budget / 1e6:.0f} MB (memory_budget)")
-        return Lattice(self.topology, resolution)
+        return Lattice(self.topology, resolution,
+                       flip=obtuse_flips(self.topology, self.layouts.angles))
 
     def tessellate(self, resolution: int):
         """(points (P,3), triangles (T,3) int, normals (P,3)) at `resolution` segments per edge.
