@@ -24,7 +24,7 @@ import scipy.sparse as sp
 from .monomials import bending_gram, monomial_exponents, monomials, n_monomials
 
 __all__ = ["RCOND", "CANDIDATES", "pinned_normal_inverse", "candidate_fits",
-           "candidate_fits_all", "CandidateFits"]
+           "candidate_fits_all", "CandidateFits", "shared_rows"]
 
 # relative eigenvalue cut-off of the normal matrices (in the bending metric, scaled
 # coordinates y / h): a normal-matrix eigenvalue of 1e-8 is a singular value of 1e-4 of
@@ -39,9 +39,35 @@ MAX_CONDITION = 1e4
 CANDIDATES = ((2, 1), (3, 1), (3, 2), (4, 2))
 
 
+def shared_rows(N: np.ndarray, fn):
+    """fn(N) for a batch N (K, ...) with fn row by row, evaluated once per distinct row:
+    rows equal bit for bit (stars of the same shape: a grid's interior, an icosphere's
+    symmetric vertices) share one evaluation, so the result is fn(N)'s exactly. Rows are
+    grouped by a random projection and each kept in its group only if it equals the
+    group's first row, so a key collision costs an evaluation, never a wrong result."""
+    K = len(N)
+    if K < 2:
+        return fn(N)
+    flat = N.reshape(K, -1)
+    probe = np.random.default_rng(0).uniform(0.5, 1.5, flat.shape[1])
+    _, first, inv = np.unique(flat @ probe, return_index=True, return_inverse=True)
+    rep = first[inv.ravel()]
+    rep = np.where(np.all(flat == flat[rep], axis=1), rep, np.arange(K))
+    distinct, back = np.unique(rep, return_inverse=True)
+    if len(distinct) == K:
+        return fn(N)
+    return fn(N[distinct])[back.ravel()]
+
+
 def pinned_normal_inverse(N: np.ndarray, degree: int) -> np.ndarray:
     """Truncated pseudo-inverses (K, M, M) of normal matrices N (K, M, M) of scaled-monomial
-    fits, in the bending metric: c = P @ (B^T W t) is the smoothest minimiser."""
+    fits, in the bending metric: c = P @ (B^T W t) is the smoothest minimiser. Equal
+    matrices are factored once (:func:`shared_rows`)."""
+    return shared_rows(np.asarray(N, dtype=np.float64),
+                       lambda Nd: _pinned_normal_inverse(Nd, degree))
+
+
+def _pinned_normal_inverse(N: np.ndarray, degree: int) -> np.ndarray:
     G = bending_gram(degree)
     L = np.linalg.cholesky(G)
     Li = np.linalg.inv(L)                       # G = L L^T; coordinates z = L^T c
@@ -99,8 +125,8 @@ def candidate_fits_all(rings, rules) -> list:
     n2 = np.bincount(owner[rings.ring <= 2], minlength=V)
     wider = 3 if np.any(rings.ring == 3) else 2
     out = []
-    acc = [{"normal": np.zeros((V, n_monomials(d), n_monomials(d))), "rows": [], "cols": [],
-            "vals": [], "hvals": []} for d, _ in rules]
+    acc = [{"normal": np.zeros((V, n_monomials(d), n_monomials(d))), "blocks": []}
+           for d, _ in rules]
     # batches of equal padded length (powers of two): little padding for high valences
     pad = 2 ** np.ceil(np.log2(np.maximum(cnt, 1))).astype(np.int64)
     for n in np.unique(pad).tolist():
@@ -118,7 +144,7 @@ def candidate_fits_all(rings, rules) -> list:
             use_layers = np.full(len(vs), layers)
             if layers < 2:
                 N1 = _normal(B, _data_weights(y, real & (ring <= 1)))
-                lam = np.linalg.eigvalsh(N1)
+                lam = shared_rows(N1, np.linalg.eigvalsh)
                 cond = lam[:, -1] / np.maximum(lam[:, 0], 1e-300)
                 use_layers = np.where((n1[vs] < M + 2) | (cond > MAX_CONDITION), 2, use_layers)
             use_layers = np.where((use_layers == 2) & (n2[vs] < M + 2), wider, use_layers)
@@ -131,18 +157,65 @@ def candidate_fits_all(rings, rules) -> list:
             Pinv = pinned_normal_inverse(N, degree)
             deg_of = monomial_exponents(degree).sum(1)
             A = (Pinv @ bw) / rings.h[vs][:, None, None] ** deg_of[None, :, None]  # unscaled
-            kk, nn = np.nonzero(use)
-            r = vs[:, None] * M + np.arange(M)[None, :]         # (K, M) rows
-            # data entries (one per used datum and monomial), then the pins - sum_j A_j X_v
-            a["rows"] += [r[kk].ravel(), r.ravel()]
-            a["cols"] += [np.repeat(q[kk, nn], M), np.repeat(vs, M)]
-            a["vals"] += [A[kk, :, nn].ravel(), -(A * use[:, None, :]).sum(2).ravel()]
-            # right-hand sides B^T W (X_q - X_v) of the scaled normal equations
-            a["hvals"] += [bw[kk, :, nn].ravel(), -bw.sum(2).ravel()]
+            a["blocks"].append((vs, use, q, A, bw))   # A, bw: zero off the used data
     for (degree, _), a in zip(rules, acc):
-        shape = (V * n_monomials(degree), V)
-        rows, cols = np.concatenate(a["rows"]), np.concatenate(a["cols"])
-        matrix = sp.csr_matrix((np.concatenate(a["vals"]), (rows, cols)), shape=shape)
-        rhs = sp.csr_matrix((np.concatenate(a["hvals"]), (rows, cols)), shape=shape)
+        matrix, rhs = _block_rows(a["blocks"], V, n_monomials(degree))
         out.append(CandidateFits(degree, matrix, a["normal"], rhs))
     return out
+
+
+def _block_rows(blocks, V, M):
+    """The operator and right-hand-side csr matrices (V M, V) of per-batch blocks
+    (vs (K,), use (K, n), data ids q (K, n), A (K, M, n), bw (K, M, n); both zero off the
+    used data), canonical: row v M + m holds v's used data and its pin (column v, minus
+    the row's sum) by increasing column, the entries of a vertex reached by several
+    unfoldings summed (in ring order). Written straight into the csr arrays: all rows
+    of v share v's columns, so one sort of the columns per vertex replaces the
+    coordinate sort of the entries."""
+    parts, nrow = [], np.zeros(V, dtype=np.int64)
+    for vs, use, q, A, bw in blocks:
+        cols = np.concatenate([np.where(use, q, V), vs[:, None]], axis=1)  # unused: last
+        order = np.argsort(cols, axis=1, kind="stable")
+        cols = np.take_along_axis(cols, order, axis=1)
+        # a run of equal columns is one entry (its values summed); unused slots sort last
+        head = np.ones(cols.shape, dtype=bool)
+        head[:, 1:] = cols[:, 1:] != cols[:, :-1]
+        head &= cols < V
+        nrow[vs] = head.sum(1)
+        parts.append((vs, cols, order, head, A, bw))
+    indptr = np.zeros(V * M + 1, dtype=np.int64)
+    np.cumsum(np.repeat(nrow, M), out=indptr[1:])
+    nnz = int(indptr[-1])
+    indices = np.empty(nnz, dtype=np.int32 if V < 2 ** 31 - 1 else np.int64)
+    out = [np.empty(nnz), np.empty(nnz)]
+    for vs, cols, order, head, A, bw in parts:
+        start = indptr[:-1][vs[:, None] * M + np.arange(M)]            # (K, M)
+        nr = nrow[vs]
+        if np.array_equal(head.sum(1), (cols < V).sum(1)):
+            # no repeated column (the rule): the entries are the first nr slots
+            r = int(nr.max())
+            slot = order[:, :r]
+            pos = start[:, :, None] + np.arange(r)
+            ok = np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], pos.shape)
+            full = ok.all()
+            where = pos.ravel() if full else pos[ok]
+            c = np.broadcast_to(cols[:, None, :r], pos.shape)
+            indices[where] = c.ravel() if full else c[ok]
+            for o, X in zip(out, (A, bw)):
+                X = np.concatenate([X, -X.sum(2, keepdims=True)], axis=2)
+                v = np.take_along_axis(X, slot[:, None, :], axis=2)
+                o[where] = v.ravel() if full else v[ok]
+            continue
+        slot = np.cumsum(head, axis=1) - 1                              # (K, n + 1)
+        pos = start[:, :, None] + slot[:, None, :]                      # (K, M, n + 1)
+        live = np.broadcast_to((cols < V)[:, None, :], pos.shape)
+        heads = np.broadcast_to(head[:, None, :], pos.shape)
+        indices[pos[heads]] = np.broadcast_to(cols[:, None, :], pos.shape)[heads]
+        for o, X in zip(out, (A, bw)):
+            X = np.concatenate([X, -X.sum(2, keepdims=True)], axis=2)
+            X = np.take_along_axis(X, order[:, None, :], axis=2)
+            o[pos[heads]] = 0.0
+            np.add.at(o, pos[live], X[live])                           # runs summed in order
+    shape = (V * M, V)
+    return (sp.csr_matrix((out[0], indices, indptr), shape=shape),
+            sp.csr_matrix((out[1], indices.copy(), indptr.copy()), shape=shape))
