@@ -47,7 +47,7 @@ import scipy.sparse as sp
 from ..gauge.jet import partition_jet
 from .cover import require_cover
 from .coupling import coupled_fits, identity_fits
-from .fits import CANDIDATES, candidate_fits_all
+from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomials, n_monomials
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
@@ -201,27 +201,47 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     return _Samples(sample, vertex, y, face, psi, sharp_face[face], Bu, Bs, weight, cage, L)
 
 
+def _row_matrix(B, vertex, V):
+    """csr (SC, V M) with row s holding B[s] (SC, M) in the columns vertex[s] M + m: the
+    sample rows' local functions as one sparse product with coefficients (V M, k)."""
+    SC, M = B.shape
+    cols = (vertex[:, None] * M + np.arange(M)).ravel()
+    return sp.csr_matrix((np.ascontiguousarray(B).ravel(), cols, np.arange(0, SC * M + 1, M)),
+                         shape=(SC, V * M))
+
+
 def _rows_apply(B, vertex, coef):
     """sum_m B[s, m] coef[vertex[s] M + m] (SC, 3) for per-row monomial values B (SC, M) and
     coefficients coef (V M, 3): one sparse product (no (SC, M, 3) temporaries)."""
-    SC, M = B.shape
-    cols = (vertex[:, None] * M + np.arange(M)).ravel()
-    rows = sp.csr_matrix((np.ascontiguousarray(B).ravel(), cols, np.arange(0, SC * M + 1, M)),
-                         shape=(SC, coef.shape[0]))
-    return rows @ coef
+    return _row_matrix(B, vertex, coef.shape[0] // B.shape[1]) @ coef
 
 
-def _candidate_values(cands, X, vertex, Bu):
+def _candidate_coefs(cands, X):
+    """Every candidate's coefficients (V M, 3) at positions X: computed once for the fold
+    penalty and the choice."""
+    return [(c.matrix @ X).reshape(-1, 3) for c in cands]
+
+
+def _per_degree(cands, B, vertex):
+    """{M: _row_matrix(B[:, :M], vertex)} for the candidates' coefficient counts: one
+    matrix serves every candidate of that size."""
+    V = cands[0].matrix.shape[1]
+    return {M: _row_matrix(B[:, :M], vertex, V)
+            for M in sorted({n_monomials(c.degree) for c in cands})}
+
+
+def _candidate_values(cands, X, vertex, Bu, coefs=None):
     """Values (SC, ncand, 3) of every candidate local function at the sample corners."""
+    coefs = _candidate_coefs(cands, X) if coefs is None else coefs
     out = np.empty((len(vertex), len(cands), 3))
     Xs = X[vertex]
-    for i, c in enumerate(cands):
-        M = n_monomials(c.degree)
-        out[:, i] = Xs + _rows_apply(Bu[:, :M], vertex, (c.matrix @ X).reshape(-1, 3))
+    rows = _per_degree(cands, Bu, vertex)
+    for i, (c, cf) in enumerate(zip(cands, coefs)):
+        out[:, i] = Xs + rows[n_monomials(c.degree)] @ cf
     return out
 
 
-def _fold_penalty(cands, X, smp, fn, h, rule):
+def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
     """(SC, ncand): fold h_v^2 w P max(0, fold_cos - cos(n_l(p), n_f))^2 per row and
     candidate, n_l the candidate's normal at the row's chart point, n_f its face's rest
     normal: it is zero unless the local function turns by more than arccos(fold_cos)
@@ -229,24 +249,25 @@ def _fold_penalty(cands, X, smp, fn, h, rule):
     out = np.zeros((len(smp.vertex), len(cands)))
     if not rule.fold:
         return out
+    coefs = _candidate_coefs(cands, X) if coefs is None else coefs
     nf = fn[smp.face]
     SC = len(smp.vertex)
     dm = monomials(smp.y, max(c.degree for c in cands), 1)[1]     # (SC, M, 2)
     dm = np.concatenate([dm[..., 0], dm[..., 1]])                   # (2 SC, M): d/dy1, d/dy2
-    vv = np.concatenate([smp.vertex, smp.vertex])
-    for i, c in enumerate(cands):
-        M = n_monomials(c.degree)
-        d = _rows_apply(dm[:, :M], vv, (c.matrix @ X).reshape(-1, 3))
+    rows = _per_degree(cands, dm, np.concatenate([smp.vertex, smp.vertex]))
+    for i, (c, cf) in enumerate(zip(cands, coefs)):
+        d = rows[n_monomials(c.degree)] @ cf
         n = np.cross(d[:SC], d[SC:])
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
         out[:, i] = np.maximum(0.0, rule.fold_cos - np.einsum("ij,ij->i", n, nf)) ** 2
     return (rule.fold * h[smp.vertex] ** 2 * smp.weight * smp.psi)[:, None] * out
 
 
-def _choose(cands, X, smp, rule, V, penalty):
+def _choose(cands, X, smp, rule, V, penalty, coefs=None):
     """The candidate of every vertex (V,): least mu * agreement + lam * tension + the fold
-    ``penalty`` (SC, ncand) (rest shape)."""
-    vals = _candidate_values(cands, X, smp.vertex, smp.Bu)
+    ``penalty`` (SC, ncand) (rest shape); coefs: the candidates' coefficients at X (made
+    here if not given)."""
+    vals = _candidate_values(cands, X, smp.vertex, smp.Bu, coefs)
     cage = (smp.cage @ X)[smp.sample]
     # per sample, not per face (unlike the coupling): measured Suzanne 126 pairs above
     # 60 degrees against 156 with the per-face weights
@@ -275,18 +296,8 @@ def _choose(cands, X, smp, rule, V, penalty):
 
 def _chosen(cands, choice, part, V):
     """The rows of each vertex's chosen candidate operator (``part``: "matrix" or "rhs"),
-    in the padded (V*MMAX, V) layout."""
-    rows, cols, vals = [], [], []
-    for i, c in enumerate(cands):
-        M = n_monomials(c.degree)
-        coo = getattr(c, part).tocoo()
-        mine = choice[coo.row // M] == i
-        r = coo.row[mine]
-        rows.append((r // M) * MMAX + r % M)
-        cols.append(coo.col[mine])
-        vals.append(coo.data[mine])
-    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(V * MMAX, V))
+    in the padded (V*MMAX, V) layout (:func:`gerbs_core.mesh.fits.chosen_rows`)."""
+    return chosen_rows(cands, choice, part, V, MMAX)
 
 
 def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, sharp=None,
@@ -303,8 +314,9 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
         sharp = face_sharpness(topo, X, rule.sharp_from, rule.sharp_to)
     smp = _samples(topo, charts, corners2d, cover, rings.h, rule.resolution, sharp)
     if len(cands) > 1:
-        penalty = _fold_penalty(cands, X, smp, face_normals(topo, X), rings.h, rule)
-        choice = _choose(cands, X, smp, rule, V, penalty)
+        coefs = _candidate_coefs(cands, X)
+        penalty = _fold_penalty(cands, X, smp, face_normals(topo, X), rings.h, rule, coefs)
+        choice = _choose(cands, X, smp, rule, V, penalty, coefs)
     else:
         choice = np.zeros(V, np.int64)
     degrees = np.array([c.degree for c in cands])[choice]

@@ -18,13 +18,16 @@ the number of data.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import scipy.sparse as sp
 
 from .monomials import bending_gram, monomial_exponents, monomials, n_monomials
 
 __all__ = ["RCOND", "CANDIDATES", "pinned_normal_inverse", "candidate_fits",
-           "candidate_fits_all", "CandidateFits", "shared_rows"]
+           "candidate_fits_all", "CandidateFits", "shared_rows",
+           "chosen_rows"]
 
 # relative eigenvalue cut-off of the normal matrices (in the bending metric, scaled
 # coordinates y / h): a normal-matrix eigenvalue of 1e-8 is a singular value of 1e-4 of
@@ -42,6 +45,12 @@ CANDIDATES = ((2, 1), (3, 1), (3, 2), (4, 2))
 CHUNK_DATA = 16_384
 
 
+@lru_cache(maxsize=None)
+def _probe(n: int) -> np.ndarray:
+    """A fixed random vector (n,): the grouping key of :func:`shared_rows`."""
+    return np.random.default_rng(0).uniform(0.5, 1.5, n)
+
+
 def shared_rows(N: np.ndarray, fn):
     """fn(N) for a batch N (K, ...) with fn row by row, evaluated once per distinct row:
     rows equal bit for bit (stars of the same shape: a grid's interior, an icosphere's
@@ -52,8 +61,7 @@ def shared_rows(N: np.ndarray, fn):
     if K < 2:
         return fn(N)
     flat = N.reshape(K, -1)
-    probe = np.random.default_rng(0).uniform(0.5, 1.5, flat.shape[1])
-    _, first, inv = np.unique(flat @ probe, return_index=True, return_inverse=True)
+    _, first, inv = np.unique(flat @ _probe(flat.shape[1]), return_index=True, return_inverse=True)
     rep = first[inv.ravel()]
     rep = np.where(np.all(flat == flat[rep], axis=1), rep, np.arange(K))
     distinct, back = np.unique(rep, return_inverse=True)
@@ -195,17 +203,19 @@ def _compact(vs, use, q, A, bw):
     r = int(nr.max())
     out = []
     unique = np.array_equal(nr, (cols < V).sum(1))     # no repeated column (the rule)
-    slot = np.cumsum(head, axis=1) - 1
     for X in (A, bw):
         X = np.concatenate([X, -X.sum(2, keepdims=True)], axis=2)
         if unique:
             out.append(np.take_along_axis(X, order[:, None, :r], axis=2))
             continue
+        # every run summed from its head (in order; a row's trailing unused slots add
+        # zeros, exactly): one reduceat over the sorted rows
         X = np.take_along_axis(X, order[:, None, :], axis=2)
-        c = np.zeros(X.shape[:2] + (r,))
-        kk, jj = np.nonzero(cols < V)
-        mm = np.arange(X.shape[1])
-        np.add.at(c, (kk[:, None], mm, slot[kk, jj][:, None]), X[kk, :, jj])   # runs in order
+        K, M, n1 = X.shape
+        heads = np.broadcast_to(head[:, None, :], X.shape)
+        sums = np.add.reduceat(X.ravel(), np.flatnonzero(heads.ravel()))
+        c = np.zeros((K, M, r))
+        c[np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], c.shape)] = sums
         out.append(c)
     if not unique:
         cols = np.take_along_axis(cols, np.argsort(~head, axis=1, kind="stable"), axis=1)
@@ -237,3 +247,38 @@ def _block_rows(blocks, V, M):
     shape = (V * M, V)
     return (sp.csr_matrix((out[0], indices, indptr), shape=shape),
             sp.csr_matrix((out[1], indices.copy(), indptr.copy()), shape=shape))
+
+
+def _ranges(starts, counts):
+    """Concatenated aranges [starts[i], starts[i] + counts[i])."""
+    total = int(counts.sum())
+    first = np.cumsum(counts) - counts
+    return np.repeat(starts - first, counts) + np.arange(total)
+
+
+def chosen_rows(cands, choice, part, V, mmax):
+    """csr (V mmax, V): rows v mmax + m (m < M) are row v M + m of the ``part`` ("matrix"
+    or "rhs") of vertex v's chosen candidate cands[choice[v]] (the padded layout of the
+    coefficients, :mod:`gerbs_core.mesh.agreement`), the others empty. The candidates'
+    canonical rows are copied as they are, straight into the output arrays."""
+    mats = [getattr(c, part).tocsr() for c in cands]
+    m = np.tile(np.arange(mmax), V)
+    v = np.repeat(np.arange(V), mmax)
+    pick = np.repeat(choice, mmax)
+    lens = np.zeros(V * mmax, dtype=np.int64)
+    src = []
+    for i, (A, c) in enumerate(zip(mats, cands)):
+        M = n_monomials(c.degree)
+        rows = np.flatnonzero((pick == i) & (m < M))
+        r = v[rows] * M + m[rows]
+        lens[rows] = A.indptr[r + 1] - A.indptr[r]
+        src.append((rows, r))
+    indptr = np.zeros(V * mmax + 1, dtype=np.int64)
+    np.cumsum(lens, out=indptr[1:])
+    data = np.empty(indptr[-1])
+    indices = np.empty(indptr[-1], dtype=mats[0].indices.dtype)
+    for A, (rows, r) in zip(mats, src):
+        cnt = lens[rows]
+        to, fr = _ranges(indptr[rows], cnt), _ranges(A.indptr[r], cnt)
+        data[to], indices[to] = A.data[fr], A.indices[fr]
+    return sp.csr_matrix((data, indices, indptr), shape=(V * mmax, V))
