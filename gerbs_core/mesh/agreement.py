@@ -53,7 +53,7 @@ from .monomials import monomial_exponents, monomials, n_monomials
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
 
 DMAX = 4                      # the highest degree of a local function
-CHUNK_ROWS = 8192             # sample-corner rows per chunk of the choice's candidate values
+CHUNK_ROWS = 8192             # rows per chunk of the energies' row-by-row work
 MMAX = n_monomials(DMAX)      # coefficients per vertex in the padded layout
 
 
@@ -175,11 +175,16 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     for n in np.unique(topo.face_sizes).tolist():
         sel = np.flatnonzero(topo.face_sizes[lf] == n)
         c = topo.face_offsets[lf[sel]][None, :] + np.arange(n)[:, None]   # (n, Ln)
-        psi, _ = cover.psi_jet(charts, c, x[sel][None], 0)
-        require_cover(float(psi[0].max(axis=0).min()), cover.kernel)
-        Psi = partition_jet(psi, 0)[0]
+        Psi, y = np.empty(c.shape), np.empty(c.shape + (2,))
+        eps = np.inf
+        # in chunks of samples (cache-sized temporaries), written back in the rows' order
+        for j in _chunks(len(sel)):
+            psi, pol = cover.psi_jet(charts, c[:, j], x[sel[j]][None], 0)
+            eps = min(eps, float(psi[0].max(axis=0).min()))
+            Psi[:, j] = partition_jet(psi, 0)[0]
+            y[:, j] = charts.to_chart(c[:, j], x[sel[j]][None], pol=pol)[0]
+        require_cover(eps, cover.kernel)
         v = topo.face_vertices[c]
-        y = charts.to_chart(c, x[sel][None])[0]
         # rows with Psi = 0 (outside the vertex's support) or Psi = 1 (at the vertex: l_v = X_v
         # = the cage there) add exactly nothing to any energy: dropped (35-45% of the rows)
         live = (Psi > 0.0) & (Psi < 1.0)
@@ -236,7 +241,7 @@ def _per_degree(cands, coefs, B, vertex):
 
 
 def _chunks(n):
-    """Slices of CHUNK_ROWS sample-corner rows: the per-row work of the choice in
+    """Slices of CHUNK_ROWS of n rows (sample-corner rows, or samples): row-by-row work in
     cache-sized pieces (measured: whole arrays made the fold penalty's time per row 2x
     larger on a 128x128 grid than on a 64x64 one)."""
     return [slice(s, min(n, s + CHUNK_ROWS)) for s in range(0, n, CHUNK_ROWS)]
