@@ -195,7 +195,7 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     y = np.concatenate([p[3] for p in parts])
     Bu = monomials(y, DMAX)[0]
     deg = monomial_exponents(DMAX).sum(1)
-    Bs = Bu / h[vertex][:, None] ** deg[None, :]
+    Bs = Bu / (h[:, None] ** deg[None, :])[vertex]          # the powers once per vertex
     slot_rows = np.repeat(np.arange(L), cw.shape[1])
     slot_cols = topo.face_vertices[np.minimum(topo.face_offsets[lf][:, None] + np.arange(cw.shape[1]),
                                               topo.face_offsets[lf + 1][:, None] - 1)].ravel()
