@@ -256,12 +256,23 @@ def _ranges(starts, counts):
     return np.repeat(starts - first, counts) + np.arange(total)
 
 
+def _canonical(A):
+    """A as canonical csr (sorted, duplicates summed; a product's rows may come unsorted),
+    the caller's matrix untouched."""
+    A = A.tocsr()
+    if not A.has_canonical_format:
+        A = A.copy()
+        A.sum_duplicates()
+    return A
+
+
 def chosen_rows(cands, choice, part, V, mmax):
     """csr (V mmax, V): rows v mmax + m (m < M) are row v M + m of the ``part`` ("matrix"
     or "rhs") of vertex v's chosen candidate cands[choice[v]] (the padded layout of the
     coefficients, :mod:`gerbs_core.mesh.agreement`), the others empty. The candidates'
-    canonical rows are copied as they are, straight into the output arrays."""
-    mats = [getattr(c, part).tocsr() for c in cands]
+    canonical rows are copied as they are, straight into the output arrays (the same
+    entries in the same order as a coordinate-format selection would give)."""
+    mats = [_canonical(getattr(c, part)) for c in cands]
     m = np.tile(np.arange(mmax), V)
     v = np.repeat(np.arange(V), mmax)
     pick = np.repeat(choice, mmax)
