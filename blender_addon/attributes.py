@@ -67,7 +67,10 @@ class Carried:
         return tuple(layer.key for layer in self.layers)
 
     def same(self, other) -> bool:
-        """Same layers with the same values (bit for bit) and the same active maps."""
+        """Same layers with the same values (bit for bit) and the same active maps (the
+        same object: the node group found its values equal, stack.read_input)."""
+        if other is self:
+            return True
         return (other is not None and self.keys() == other.keys()
                 and self.flags() == other.flags()
                 and np.array_equal(self.edge_verts, other.edge_verts)
@@ -95,18 +98,35 @@ def _domain_size(mesh, domain: str) -> int:
             "CORNER": len(mesh.loops)}[domain]
 
 
+def _carried_attributes(mesh, skip=()):
+    """The attributes of `mesh` that are carried, in the mesh's order."""
+    for attr in mesh.attributes:
+        if (carried_name(attr.name) and attr.name not in skip
+                and attr.data_type in ids.CARRIED_TYPES and attr.domain in ids.DOMAINS):
+            yield attr
+
+
 def attribute_layers(mesh, skip=()) -> list:
     """The carried attribute layers of `mesh` (an evaluated or add-on-owned mesh)."""
-    out = []
-    for attr in mesh.attributes:
-        name = attr.name
-        if not carried_name(name) or name in skip or attr.data_type not in ids.CARRIED_TYPES:
-            continue
-        if attr.domain not in ids.DOMAINS:
-            continue
-        out.append(Layer(name, attr.domain, attr.data_type,
-                         _read(attr, _domain_size(mesh, attr.domain))))
-    return out
+    return [Layer(a.name, a.domain, a.data_type, _read(a, _domain_size(mesh, a.domain)))
+            for a in _carried_attributes(mesh, skip)]
+
+
+def layer_keys(mesh, group_names) -> tuple:
+    """The ``Carried.keys()`` :func:`read_carried` would give (no values read)."""
+    return tuple((a.name, a.domain, a.data_type, False)
+                 for a in _carried_attributes(mesh, set(group_names))) + \
+        tuple((name, "POINT", "FLOAT", True) for name in group_names)
+
+
+def flags_of(mesh) -> tuple:
+    """``Carried.flags()`` of `mesh`: its active and render UV maps, active and default
+    color attributes."""
+    uv, render = mesh.uv_layers.active, next((u for u in mesh.uv_layers if u.active_render), None)
+    attrs = mesh.attributes
+    return (uv.name if uv is not None else "", render.name if render is not None else "",
+            getattr(attrs, "active_color_name", "") or "",
+            getattr(attrs, "default_color_name", "") or "")
 
 
 def group_weights(mesh, n_groups: int, channel: dict | None = None) -> np.ndarray:
@@ -141,18 +161,9 @@ def read_carried(mesh, group_names, channel: dict | None = None) -> Carried:
     weights = group_weights(mesh, len(group_names), channel)
     layers += [Layer(name, "POINT", "FLOAT", weights[:, [g]].copy(), group=True)
                for g, name in enumerate(group_names)]
-    edge_verts = mesh_io.read_edge_verts(mesh)
-    uv, render = mesh.uv_layers.active, next((u for u in mesh.uv_layers if u.active_render), None)
-    attrs = mesh.attributes
-    return Carried(tuple(layers), edge_verts,
-                   uv.name if uv is not None else "", render.name if render is not None else "",
-                   getattr(attrs, "active_color_name", "") or "",
-                   getattr(attrs, "default_color_name", "") or "")
+    return Carried(tuple(layers), mesh_io.read_edge_verts(mesh), *flags_of(mesh))
 
 
 def names_of(mesh, group_names) -> set:
     """The names `read_carried` would carry from `mesh` (no values read)."""
-    names = {a.name for a in mesh.attributes
-             if carried_name(a.name) and a.data_type in ids.CARRIED_TYPES
-             and a.domain in ids.DOMAINS}
-    return names | set(group_names)
+    return {a.name for a in _carried_attributes(mesh)} | set(group_names)

@@ -74,6 +74,7 @@ class SurfaceState:
     rest: np.ndarray | None = None  # (V, 3) the rest shape the stencil is bound to
     transfer: object = None  # transfer.Transfer: the output's maps of carried layers
     points: np.ndarray | None = None  # (P, 3) float64 last output (for partial updates)
+    points32: np.ndarray | None = None  # (P, 3) float32 the same, as written to the result
     record: tuple = ()  # the settings record written with the result
     stamp: str = ""  # snapshot.stamp of the record this state last wrote ("" none/failed)
     partial_updates: int = 0
@@ -251,7 +252,10 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     skey = _build_key(settings, resolution)
     view = _states.get(state_key(obj, mod))
     known_input = (st or view).input if (st or view) is not None else None
-    inp, problem = stack.read_input(obj, mod, depsgraph, settings["use_normals"], known_input)
+    # the channel names the viewport result's record (its stamp says which write)
+    record = (view.input, view.stamp) if view is not None else None
+    inp, problem = stack.read_input(obj, mod, depsgraph, settings["use_normals"], known_input,
+                                    record)
     if problem:
         return _fail(obj, mod, key, blank, problem, progress, render=render)
     retry = False
@@ -303,11 +307,13 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
     if (linear and st.stencil is not None and st.input.same_topology(inp)
             and len(res.data.vertices) == st.n_points and np.all(np.isfinite(inp.positions))):
         X = inp.positions.astype(np.float64)
-        if carried_same:
-            st.stamp = snapshot.write_positions(res.data, inp)
+        points, moved = apply_stencil(st, X)
+        if carried_same:  # the record's positions: only the moved ones while it is st's
+            own = snapshot.stamp_of(res.data) == st.stamp
+            st.stamp = snapshot.write_positions(res.data, inp, moved if own else None)
         else:
             st.stamp = write_carried(res, mod, st.transfer, inp, st.record)
-        mesh_io.write_positions(res.data, apply_stencil(st, X))  # (tags the mesh)
+        mesh_io.write_positions(res.data, points)  # (tags the mesh)
         st.input, st.positions = inp, X
         st.update_seconds = time.perf_counter() - t0
         # Follow: the linear update is a preview; the surface of the current mesh is
@@ -348,6 +354,7 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
             f"{PREFIX}resolution {resolution} gives fewer output {misfit} than the mesh has "
             f"(loose or merged ones); raise the resolution"), progress, render=render)
     st.stencil, st.points, st.warnings = built.stencil, P, built.surface.warnings
+    st.points32 = P.astype(np.float32)  # what write_geometry wrote
     for warning in st.warnings:
         log.warning("GERBS: %s: %s", obj.name, warning.message)
     st.record = gn.settings_record(settings, resolution)

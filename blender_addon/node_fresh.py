@@ -31,15 +31,17 @@ _CHECK_TYPES = (("FLOAT_VECTOR", "VECTOR"), ("FLOAT_COLOR", "RGBA"), ("INT", "IN
 
 
 def fresh(t, base, result, names, current: dict, resolution):
-    """Is `result` fresh for the input `base` (the three checks below, each a part)?
-    `names`: the "Attribute Names" socket; `current`: setting key -> socket;
+    """(Is `result` fresh for the input `base` (the three checks below, each a part)?,
+    are the input's topology and recorded layers the record's (only positions may
+    differ)?). `names`: the "Attribute Names" socket; `current`: setting key -> socket;
     `resolution`: the socket of the resolution this result is for."""
     values = {spec.name: resolution if spec.key == "resolution" else current[spec.key]
               for spec in ids.RECORD_SETTINGS}
-    return t.boolean(
-        "AND", t.group(_settings_part(), {"Result": result, **values})["Fresh"],
-        t.group(_geometry_part(), {"Base": base, "Result": result})["Fresh"],
-        t.group(_layers_part(), {"Base": base, "Result": result, "Names": names})["Fresh"])
+    geometry = t.group(_geometry_part(), {"Base": base, "Result": result})
+    layers = t.group(_layers_part(), {"Base": base, "Result": result, "Names": names})["Fresh"]
+    return (t.boolean("AND", t.group(_settings_part(), {"Result": result, **values})["Fresh"],
+                      geometry["Fresh"], layers),
+            t.boolean("AND", geometry["Topology"], layers))
 
 
 def _settings_part():
@@ -52,9 +54,13 @@ def _settings_part():
 
 
 def _geometry_part():
-    return node_parts.ensure(
-        "Geometry Fresh", [("Base", _GEO), ("Result", _GEO)], [("Fresh", _BOOL)],
-        lambda t, gin, gout: t.link(geometry_fresh(t, gin["Base"], gin["Result"]), gout["Fresh"]))
+    def build(t, gin, gout):
+        topology = topology_fresh(t, gin["Base"], gin["Result"])
+        t.link(t.boolean("AND", topology, positions_fresh(t, gin["Base"], gin["Result"])),
+               gout["Fresh"])
+        t.link(topology, gout["Topology"])
+    return node_parts.ensure("Geometry Fresh", [("Base", _GEO), ("Result", _GEO)],
+                             [("Fresh", _BOOL), ("Topology", _BOOL)], build)
 
 
 def _layers_part():
@@ -91,8 +97,17 @@ def _differs(t, compare, value, stored):
                      t.boolean("NOT", t.compare(compare, "EQUAL", value, value)))
 
 
-def geometry_fresh(t, base, result):
-    """Exact equality of the base geometry with the record on the result."""
+def positions_fresh(t, base, result):
+    """Every position of the base equals the record's (bit for bit; a NaN never does)."""
+    position = t.node("GeometryNodeInputPosition").outputs[0]
+    return t.none_differ(base, "POINT", _differs(
+        t, "VECTOR", position,
+        t.sample(result, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", t.index())))
+
+
+def topology_fresh(t, base, result):
+    """Exact equality of everything but the positions of the base geometry with the
+    record on the result: counts, corner vertices, face sizes, material indices, edges."""
     size = t.node("GeometryNodeAttributeDomainSize", component="MESH")
     t.link(base, size.inputs["Geometry"])
     counts = ("Point Count", "Face Count", "Face Corner Count", "Edge Count")
@@ -100,10 +115,6 @@ def geometry_fresh(t, base, result):
                         t.sample(result, f"{ids.SNAP_COUNT}{k}", "INT", "POINT", 0))
               for k, name in enumerate(counts)]
     index = t.index()
-    position = t.node("GeometryNodeInputPosition").outputs[0]
-    checks.append(t.none_differ(base, "POINT", _differs(
-        t, "VECTOR", position,
-        t.sample(result, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", index))))
     corner_vert = t.node("GeometryNodeVertexOfCorner")
     t.link(index, corner_vert.inputs["Corner Index"])
     checks.append(t.none_differ(base, "CORNER", t.compare(
@@ -186,13 +197,14 @@ def shown(t, result, names):
                                     gout["Geometry"])), {"Result": result, "Names": names})[0]
 
 
-def channel(t, base, table, names):
+def channel(t, base, table, names, kept):
     """:func:`channel_tree` as a part."""
     return t.group(node_parts.ensure(
-        "Channel", [("Base", _GEO), ("Table", _GEO), ("Names", _STR)], [("Geometry", _GEO)],
-        lambda t, gin, gout: t.link(channel_tree(t, gin["Base"], gin["Table"], gin["Names"]),
-                                    gout["Geometry"])),
-        {"Base": base, "Table": table, "Names": names})[0]
+        "Channel", [("Base", _GEO), ("Table", _GEO), ("Names", _STR), ("Kept", _BOOL)],
+        [("Geometry", _GEO)],
+        lambda t, gin, gout: t.link(channel_tree(t, gin["Base"], gin["Table"], gin["Names"],
+                                                 gin["Kept"]), gout["Geometry"])),
+        {"Base": base, "Table": table, "Names": names, "Kept": kept})[0]
 
 
 def with_groups(t, result, names):
@@ -203,12 +215,22 @@ def with_groups(t, result, names):
                                        "FLOAT")[0])
 
 
-def channel_tree(t, base, table, names):
+def channel_tree(t, base, table, names, kept):
     """The input as passed on while no surface is shown: its positions in
-    ``ids.CHANNEL_POSITION`` and, for the vertex-group layers of `table`'s record, their
-    weights in ``ids.CHANNEL_WEIGHT`` + i."""
+    ``ids.CHANNEL_POSITION``, in ``ids.CHANNEL_RECORD`` + k the serial of `table`'s
+    record when `kept` (the input's topology and layers are that record's), else -1 and
+    the face sizes in ``ids.CHANNEL_FACE_SIZE`` (a Switch: not computed when kept), and,
+    for the vertex-group layers of `table`'s record, their weights in
+    ``ids.CHANNEL_WEIGHT`` + i."""
     position = t.node("GeometryNodeInputPosition").outputs[0]
     geometry = t.store(base, ids.CHANNEL_POSITION, "FLOAT_VECTOR", "POINT", position)
+    for k, name in enumerate(ids.SERIAL_NAMES):
+        serial = t.switch("INT", kept, -1, t.sample(table, name, "INT", "POINT", 0))
+        geometry = t.store(geometry, f"{ids.CHANNEL_RECORD}{k}", "INT", "POINT", serial)
+    sizes = t.node("GeometryNodeCornersOfFace")
+    t.link(t.index(), sizes.inputs["Face Index"])
+    geometry = t.switch("GEOMETRY", kept, t.store(geometry, ids.CHANNEL_FACE_SIZE, "INT", "FACE",
+                                                  sizes.outputs["Total"]), geometry)
     return _group_loop(
         t, geometry, table, names,
         target=lambda i, name: t.string_join(ids.CHANNEL_WEIGHT, t.number_string(i)),
@@ -232,7 +254,7 @@ def strip_record(t, geometry):
         t.link(geometry, remove.inputs["Geometry"])
         return remove.outputs[0]
     t.nodes.remove(remove)
-    for name in ids.record_names():
+    for name in ids.record_names() + ids.SERIAL_NAMES:
         remove = t.node("GeometryNodeRemoveAttribute")
         remove.inputs["Name"].default_value = name
         t.link(geometry, remove.inputs["Geometry"])

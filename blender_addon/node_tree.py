@@ -103,17 +103,19 @@ def build(group) -> None:
     has_error = t.warning(t.compare("STRING", "NOT_EQUAL", gin.outputs["Error"], ""),
                           gin.outputs["Error"], "ERROR")
     no_error = t.boolean("NOT", has_error)
-    view_fresh = _fresh(t, gin, base, results["result"], current, current["resolution"])
+    view_fresh, view_kept = _fresh(t, gin, base, results["result"], current,
+                                   current["resolution"])
     stale = t.warning(t.boolean("AND", no_error, t.boolean("NOT", view_fresh)),
                       ids.STALE_MESSAGE, "WARNING")
     repaired = t.warning(t.boolean("AND", no_error, view_fresh, t.compare(
         "STRING", "NOT_EQUAL", gin.outputs["Warning"], "")), gin.outputs["Warning"], "WARNING")
     used = t.boolean("OR", repaired, t.boolean("NOT", repaired))  # (evaluates the warning)
-    passed = node_fresh.channel(t, base, results["result"], gin.outputs["Attribute Names"])
+    passed = node_fresh.channel(t, base, results["result"], gin.outputs["Attribute Names"],
+                                view_kept)
     view = t.switch("GEOMETRY", t.boolean("AND", no_error, t.boolean("NOT", stale), used),
                     passed, _shown(t, gin, results["result"]))
     render_fresh = _fresh(t, gin, base, results["render_result"], current,
-                          current["render_resolution"])
+                          current["render_resolution"])[0]
     render = t.switch("GEOMETRY", t.boolean("AND", no_error, render_fresh), view,
                       _shown(t, gin, results["render_result"]))
     is_viewport = t.node("GeometryNodeIsViewport").outputs[0]

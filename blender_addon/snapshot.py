@@ -24,17 +24,37 @@ from .mesh_io import MeshInput, _get
 
 
 # session salt: a stamp saved in a file from another session never equals one made here
-_STAMPS = (f"{os.getpid():x}.{os.urandom(4).hex()}.{k}" for k in itertools.count())
+_SALT = int.from_bytes(os.urandom(4), "little") % 0x7FFFFFFF + 1  # 1 .. 2^31 - 1 (int32)
+_COUNTER = itertools.count(1)
 
 
 def stamp(mesh) -> str:
     """Mark `mesh`'s record as just written: a stamp never used before in this session,
     stored on the mesh (a custom property: undo and file loads restore the stamp with
     the record) and returned. While the mesh still carries the stamp a state kept, its
-    record is the input that state wrote (engine: no need to read it back)."""
-    value = next(_STAMPS)
+    record is the input that state wrote (engine: no need to read it back).
+
+    The same stamp as two ints (:func:`serial`) goes into ``ids.SERIAL_NAMES`` (first
+    point), where the node group can see it: it passes it on in the channel when the
+    input's topology and layers equal this record (stack.read_input)."""
+    value = f"{os.getpid():x}.{_SALT}.{next(_COUNTER)}"
     mesh[ids.RECORD_STAMP] = value
+    for name, part in zip(ids.SERIAL_NAMES, serial(value) if len(mesh.vertices) else ()):
+        attr = mesh.attributes.get(name)
+        if attr is None or attr.data_type != "INT" or attr.domain != "POINT":
+            put(mesh, name, "INT", "POINT", [part], len(mesh.vertices))
+        elif len(attr.data):
+            attr.data[0].value = part  # one element: the node group reads only the first
     return value
+
+
+def serial(value: str) -> tuple:
+    """(salt, counter) of a stamp of this session, (0, 0) for anything else (no record
+    write has salt 0)."""
+    parts = value.split(".")
+    if len(parts) != 3 or parts[1] != str(_SALT) or not parts[2].isdigit():
+        return (0, 0)
+    return (_SALT, int(parts[2]))
 
 
 def stamp_of(mesh) -> str:
@@ -84,9 +104,22 @@ def misfit(mesh, inp: MeshInput) -> str:
     return ", ".join(k for k in need if have[k] < need[k])
 
 
-def write_positions(mesh, inp: MeshInput) -> str:
-    """Only the positions (the fast path: nothing else changed); returns the new stamp."""
-    put(mesh, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", inp.positions, len(mesh.vertices))
+_FEW = 64  # up to this many changed positions are written one by one (~1 us each)
+
+
+def write_positions(mesh, inp: MeshInput, moved=None) -> str:
+    """Only the positions (the fast path: nothing else changed); returns the new stamp.
+    `moved`: (m,) the only vertices whose positions differ from the record on `mesh`
+    (None: unknown): a few are written element by element instead of the whole
+    attribute (a result has ~4 r^2 times more points than the record has vertices)."""
+    attr = mesh.attributes.get(ids.SNAP_POSITION)
+    if (moved is None or len(moved) > _FEW or attr is None or attr.domain != "POINT"
+            or attr.data_type != "FLOAT_VECTOR"):
+        put(mesh, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", inp.positions, len(mesh.vertices))
+    else:
+        data = attr.data
+        for i in moved.tolist():
+            data[i].vector = inp.positions[i]
     return stamp(mesh)
 
 

@@ -19,14 +19,18 @@ Reading it never touches the user's mesh (mesh_io): it comes from
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import Counter
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import attributes, ids, mesh_io
+from . import attributes, ids, mesh_io, snapshot
 from .errors import PREFIX
 
 FRESH = "fresh"  # read_input: the modifier shows a result (its record is the input)
+# how often read_input read everything ("full") or only the positions ("positions": the
+# channel says the topology and layers are the record's); tests count with it
+reads: Counter = Counter()
 
 
 @dataclass(frozen=True)
@@ -62,15 +66,45 @@ def group_names(obj) -> list:
     return [g.name for g in obj.vertex_groups]
 
 
-def _read_final(final, groups, normals, known):
+def _read_final(final, groups, normals, known, record):
     attr = final.attributes.get(ids.CHANNEL_POSITION)
     if attr is None or attr.domain != "POINT" or attr.data_type != "FLOAT_VECTOR":
         return FRESH
-    positions = np.empty(len(final.vertices) * 3, dtype=np.float32)
-    attr.data.foreach_get("vector", positions)
-    inp = mesh_io.read_mesh(final, normals, positions.reshape(-1, 3))
+    positions = np.empty((len(final.vertices), 3), dtype=np.float32)
+    attr.data.foreach_get("vector", positions.ravel())
+    kept = _kept(final, groups, normals, positions, record)
+    if kept is not None:
+        reads["positions"] += 1
+        return kept
+    reads["full"] += 1
+    sizes = mesh_io.read_face_ints(final, ids.CHANNEL_FACE_SIZE)  # (none while it names a record)
+    inp = mesh_io.read_mesh(final, normals, positions, sizes)
     channel = _group_channel(known, groups)
     return inp.with_carried(attributes.read_carried(final, groups, channel))
+
+
+def _kept(final, groups, normals, positions, record):
+    """`record`'s input with these positions (and normals), when the channel says the
+    input's counts, topology, material indices, edges and recorded layers equal the
+    record of that stamp (the node group compared them, ids.CHANNEL_RECORD), and the
+    mesh has the same layers and active maps; else None (read everything).
+    `record`: (input, stamp) the viewport result's state wrote, or None."""
+    if record is None or record[0] is None or record[0].carried is None:
+        return None
+    inp, want = record[0], snapshot.serial(record[1])
+    if want == (0, 0) or len(positions) != len(inp.positions):
+        return None
+    for k, part in enumerate(want):
+        attr = final.attributes.get(f"{ids.CHANNEL_RECORD}{k}")
+        if (attr is None or attr.domain != "POINT" or attr.data_type != "INT"
+                or not len(attr.data) or attr.data[0].value != part):
+            return None
+    carried = inp.carried
+    if (attributes.layer_keys(final, groups) != carried.keys()
+            or attributes.flags_of(final) != carried.flags()):
+        return None
+    return replace(inp, positions=positions,
+                   normals=mesh_io.read_normals(final) if normals else None)
 
 
 def _group_channel(known, groups) -> dict:
@@ -96,10 +130,13 @@ def unhonoured_message(obj, stack: Stack) -> str:
             f"last")
 
 
-def read_input(obj, mod, depsgraph, normals: bool, known=None):
+def read_input(obj, mod, depsgraph, normals: bool, known=None, record=None):
     """What `mod` receives now: ``(MeshInput with carried, "")``, ``(FRESH, "")`` while it
     shows a result, ``(None, "")`` when it is not evaluated, or ``(None, message)``.
-    `known`: the last input read (its vertex-group layers tell the channel's names)."""
+    `known`: the last input read (its vertex-group layers tell the channel's names);
+    `record`: (input, stamp) of the viewport result's last record write, or None: while
+    the channel says only positions differ from that record, only they are read (an
+    Edit Mode drag reads 12 bytes a vertex instead of the whole mesh)."""
     stack = stack_of(obj, mod, depsgraph.mode == "RENDER")
     if not stack.enabled:
         return None, ""
@@ -108,7 +145,7 @@ def read_input(obj, mod, depsgraph, normals: bool, known=None):
     if stack.deform_after and obj_eval.is_evaluated:
         final = obj_eval.to_mesh() if stack.edit else obj_eval.data
         try:
-            return _read_final(final, groups, normals, known), ""
+            return _read_final(final, groups, normals, known, record), ""
         finally:
             if stack.edit:
                 obj_eval.to_mesh_clear()

@@ -239,31 +239,32 @@ if {method!r} == "GERBS":
     from gerbs_core import GERBSInterpolator as make
 else:
     from scipy.interpolate import CloughTocher2DInterpolator as make
-ts = []
+ts, cs = [], []
 for _ in range(4):
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     make(P, f)(X)
     ts.append(time.perf_counter() - t)
-print(ts[0], float(np.median(ts[1:])))
+    cs.append(time.process_time() - c)
+print(ts[0], float(np.median(ts[1:])), cs[0], float(np.median(cs[1:])))
 """
 
 
 def cold(repeats=3):
+    """First call (fit + 200 x 200 grid) in fresh processes, GERBS and Clough-Tocher
+    alternating process by process (both see the same load); wall and CPU seconds."""
     print("\n### First call in a fresh process (n = 2, 200 x 200 grid): cold / warm s, "
-          "median of fresh processes\n")
+          "median of fresh processes, GERBS and CT alternating; ratios by wall (CPU) time\n")
     print("| N | GERBS cold | GERBS warm | CT cold | CT warm | cold x | warm x |")
     print("|---|---|---|---|---|---|---|")
     for N in (4004, 100_000):
-        res = {}
-        for method in ("GERBS", "CT"):
-            runs = []
-            for _ in range(repeats):
+        runs = {"GERBS": [], "CT": []}
+        for _ in range(repeats):
+            for method in ("GERBS", "CT"):
                 code = _COLD.format(root=ROOT, N=N, method=method)
                 out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                      check=True)
-                runs.append([float(a) for a in out.stdout.split()])
-            res[method] = np.median(np.array(runs), axis=0)
-        gc, gw = res["GERBS"]
-        cc, cw = res["CT"]
-        print(f"| {N:,} | {gc:.3f} | {gw:.3f} | {cc:.3f} | {cw:.3f} | {gc / cc:.2f} | {gw / cw:.2f} |",
-              flush=True)
+                runs[method].append([float(a) for a in out.stdout.split()])
+        gc, gw, gcc, gwc = np.median(np.array(runs["GERBS"]), axis=0)
+        cc, cw, ccc, cwc = np.median(np.array(runs["CT"]), axis=0)
+        print(f"| {N:,} | {gc:.3f} | {gw:.3f} | {cc:.3f} | {cw:.3f} | {gc / cc:.2f} ({gcc / ccc:.2f}) "
+              f"| {gw / cw:.2f} ({gwc / cwc:.2f}) |", flush=True)

@@ -94,6 +94,7 @@ class ChebyshevMaster:
         self.left = _neumaier_cumsum(cell_int)
         self.breaks = np.concatenate([self.a, [1.0]])
         self.tail_sum = tail_sum
+        self._icoef_t = np.ascontiguousarray(self.icoef.T)
 
     @property
     def n_cells(self) -> int:
@@ -105,12 +106,13 @@ class ChebyshevMaster:
         k = np.clip(np.searchsorted(self.breaks, t, side="right") - 1, 0, self.n_cells - 1)
         a, b = self.a[k], self.b[k]
         y = (2.0 * t - a - b) / (b - a)
-        c = self.icoef[k]                                      # (n, deg+2)
+        y2 = 2.0 * y
+        cT = self._icoef_t                                     # (deg+2, cells)
         b1 = np.zeros_like(t)
         b2 = np.zeros_like(t)
-        for j in range(c.shape[1] - 1, 0, -1):
-            b1, b2 = c[:, j] + 2.0 * y * b1 - b2, b1
-        val = c[:, 0] + y * b1 - b2
+        for j in range(cT.shape[0] - 1, 0, -1):    # one contiguous gather per coefficient
+            b1, b2 = cT[j].take(k) + y2 * b1 - b2, b1
+        val = cT[0].take(k) + y * b1 - b2
         return (self.left[k] + val) / self.Z
 
 

@@ -49,6 +49,7 @@ from .cover import require_cover
 from .coupling import coupled_fits, identity_fits
 from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomials, n_monomials
+from .spread_fits import SPREAD, gate, spread_candidates
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
 
@@ -83,6 +84,8 @@ class FairnessRule:
     # Suzanne above 60 degrees 74 -> 82, the Cone's largest dihedral at r = 8 39 -> 56
     resolution: int = 3
     candidates: tuple = CANDIDATES
+    # stars spreading above this many degrees get an extra candidate (mesh.spread_fits)
+    spread: float = SPREAD
 
     def __post_init__(self):
         from ..errors import InvalidParameterError
@@ -92,6 +95,8 @@ class FairnessRule:
                 raise InvalidParameterError(name, f"must be finite and >= 0, got {v!r}")
         if not (np.isfinite(self.fold_cos) and -1 <= self.fold_cos <= 1):
             raise InvalidParameterError("fold_cos", f"must be in [-1, 1], got {self.fold_cos!r}")
+        if not (np.isfinite(self.spread) and 0 <= self.spread <= 180):
+            raise InvalidParameterError("spread", f"must be in [0, 180], got {self.spread!r}")
         if not (0 <= self.sharp_from < self.sharp_to <= 180):
             raise InvalidParameterError("sharp_from", "need 0 <= sharp_from < sharp_to <= 180")
         if not (0 < self.damping <= 1):
@@ -332,12 +337,17 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
     (:func:`gerbs_core.mesh.crease_fits.curve_constraints`) or None."""
     V = topo.n_vertices
     cands = candidate_fits_all(rings, rule.candidates)
+    # extra candidates at spread stars (mesh.spread_fits): none on smooth meshes
+    extra, spiky = spread_candidates(topo, charts, corners2d, rings, X, rule.spread) \
+        if len(cands) > 1 else ([], None)
+    cands = cands + extra
     if sharp is None:
         sharp = face_sharpness(topo, X, rule.sharp_from, rule.sharp_to)
     smp = _samples(topo, charts, corners2d, cover, rings.h, rule.resolution, sharp)
     if len(cands) > 1:
         coefs = _candidate_coefs(cands, X)
         penalty = _fold_penalty(cands, X, smp, face_normals(topo, X), rings.h, rule, coefs)
+        penalty = gate(penalty, smp.vertex, len(extra), spiky)
         choice = _choose(cands, X, smp, rule, V, penalty, coefs)
     else:
         choice = np.zeros(V, np.int64)

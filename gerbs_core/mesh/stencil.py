@@ -31,17 +31,6 @@ def _canonical(m):
     return m
 
 
-def _scatter_add(points, m, values) -> None:
-    """points[m.row] += m.data * values[m.col] (summed per row): the hit rows sorted once
-    and each column summed by bincount (np.add.at is an order of magnitude slower)."""
-    if m.nnz == 0:
-        return
-    hit, inv = np.unique(m.row, return_inverse=True)
-    for k in range(values.shape[1]):
-        points[hit, k] += np.bincount(inv, weights=m.data * values[m.col, k],
-                                      minlength=len(hit))
-
-
 class Stencil:
     """The output points of a surface at one resolution as a linear map of the positions.
 
@@ -50,7 +39,8 @@ class Stencil:
     (V M, V) (csr, made on first use: a full build needs only ``fits(X)``, partial
     updates need A); ``triangles`` (T, 3), ``vertex_samples`` (V,) the output point of
     each vertex, ``lattice`` (:class:`gerbs_core.mesh.lattice.Lattice`). Immutable; the
-    transposes for partial updates are made on first use.
+    transposes for partial updates are made on first use, and the last moved vertices'
+    columns kept (:meth:`moved_columns`).
     """
 
     def __init__(self, base, mono, fits, lattice):
@@ -60,6 +50,7 @@ class Stencil:
         self.triangles = lattice.triangles
         self.vertex_samples = lattice.vertex_sample
         self._csc = None
+        self._moved = None  # (key, moved_columns) of the last moved vertices
 
     @property
     def operator(self) -> sp.csr_matrix:
@@ -92,21 +83,34 @@ class Stencil:
         ``delta`` (m, k), in place, touching only the affected rows (exact up to round-off:
         the same sums regrouped). Needs only the moved vertices' columns of the
         coefficient operator (:meth:`CoupledFits.columns`), never the whole operator."""
+        hit, dW = self.moved_columns(moved)
+        if len(hit):
+            points[hit] += dW @ np.asarray(delta, dtype=np.float64)
+
+    def moved_columns(self, moved) -> tuple[np.ndarray, sp.csr_matrix]:
+        """(hit (h,) the output rows the vertices ``moved`` (m,) reach, dW (h, m) csr:
+        those rows of W's columns ``moved``, as B[:, moved] + E[:, rows] C[rows] with C
+        the coefficient map's columns ``moved`` and rows those C reaches). Memoized for
+        the last ``moved`` (a drag moves the same vertices step after step: each step is
+        then one small product)."""
+        moved = np.asarray(moved, dtype=np.int64).ravel()
+        key = moved.tobytes()
+        if self._moved is not None and self._moved[0] == key:
+            return self._moved[1]
         if self._csc is None:
             self._csc = (self.base.tocsc(), self.mono.tocsc())
         Bc, Ec = self._csc
-        moved = np.asarray(moved, dtype=np.int64)
-        dB = Bc[:, moved]
-        # coefficient changes on the rows the moved columns touch only: a dense (V M, k)
-        # product would cost the whole mesh on every drag step
-        C = self.fits.columns(moved).tocsr()
-        rows = np.flatnonzero(np.diff(C.indptr))
-        dc = C[rows] @ delta
-        keep = np.any(dc != 0, axis=1)
-        rows, dc = rows[keep], dc[keep]
-        dE = Ec[:, rows]
-        _scatter_add(points, dB.tocoo(), delta)
-        _scatter_add(points, dE.tocoo(), dc)
+        # coefficient changes on the rows the moved columns touch only (csc C: its row
+        # indices; never an O(V M) pass over all coefficient rows)
+        C = self.fits.columns(moved).tocoo()
+        rows = np.unique(C.row)
+        Cr = sp.csr_matrix((C.data, (np.searchsorted(rows, C.row), C.col)),
+                           shape=(len(rows), len(moved)))
+        cols = (Bc[:, moved] + Ec[:, rows] @ Cr).tocsr()
+        hit = np.flatnonzero(np.diff(cols.indptr))
+        plan = (hit, _canonical(cols[hit]))
+        self._moved = (key, plan)
+        return plan
 
     def matrix(self) -> sp.csr_matrix:
         """The explicit W = B + E A (P, V) -- for tests and small meshes; it holds many

@@ -67,6 +67,7 @@ def delaunay_triangulation(points):
     if len(tri.coplanar):
         raise InvalidPointSetError("points: Qhull dropped these points (numerically coincident)",
                                    tri.coplanar[:, 0])
+    _set_transforms(tri, points)
     s = tri.simplices.copy()
     nb = tri.neighbors.copy()
     P = points[s]
@@ -77,11 +78,44 @@ def delaunay_triangulation(points):
     return tri, s, nb
 
 
+def _set_transforms(tri, points):
+    """Fill ``tri``'s barycentric transforms (nsimplex, 3, 2) in one vectorized pass.
+
+    scipy computes them lazily on the first ``find_simplex``, one LAPACK LU per
+    triangle: 0.2 s for 10^5 points, a fifth of a CloughTocher2DInterpolator fit.
+    Same layout and rule: rows 0-1 the inverse of T = [p0 - p2, p1 - p2] (columns),
+    row 2 the vertex p2; NaN where the 1-norm reciprocal condition number of T is
+    below eps (degenerate triangles). Differs from LAPACK's only in rounding."""
+    s = tri.simplices
+    r = points[s[:, 2]]
+    d0, d1 = points[s[:, 0]] - r, points[s[:, 1]] - r            # T = [[a, b], [c, d]]
+    a, c, b, d = d0[:, 0], d0[:, 1], d1[:, 0], d1[:, 1]
+    out = np.empty((len(s), 3, 2))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv_det = 1.0 / (a * d - b * c)
+        np.multiply(d, inv_det, out=out[:, 0, 0])
+        np.multiply(-b, inv_det, out=out[:, 0, 1])
+        np.multiply(-c, inv_det, out=out[:, 1, 0])
+        np.multiply(a, inv_det, out=out[:, 1, 1])
+        norm_t = np.maximum(np.abs(a) + np.abs(c), np.abs(b) + np.abs(d))
+        A = np.abs(out[:, :2])
+        norm_i = np.maximum(A[:, 0, 0] + A[:, 1, 0], A[:, 0, 1] + A[:, 1, 1])
+        bad = ~(1.0 / (norm_t * norm_i) >= np.finfo(float).eps)
+    out[:, 2] = r
+    out[bad] = np.nan
+    # scipy's cache of the property ``transform`` (a private attribute, None until the
+    # first find_simplex; tests/core/test_covers.py compares with scipy's own): filled
+    # only where this scipy has it empty, else scipy builds it as before
+    if getattr(tri, "_transform", 0) is None:
+        tri._transform = out
+
+
 def _corner_in(s, tri_idx, vertex):
     """Edge index 3 t + k of the corner of triangle ``tri_idx`` at ``vertex`` (-1 if none)."""
     ok = tri_idx >= 0
     t = np.where(ok, tri_idx, 0)
-    k = np.argmax(s[t] == vertex[:, None], axis=1)
+    st = s[t]                     # the corner holding vertex (0 if none, as argmax)
+    k = np.where(st[:, 1] == vertex, 1, 0) + np.where(st[:, 2] == vertex, 2, 0)
     return np.where(ok, 3 * t + k, -1)
 
 

@@ -134,8 +134,9 @@ class GERBSInterpolator:
                 D = D + [est[k] for k in range(known + 1, self.degree + 1)]
             D = D[: self.degree + 1]
         self.D = D
-        # T_i and its derivatives as monomial coefficients (gathered per query)
-        self._coef = coefficient_tables(D, n, 2)
+        # T_i as monomial coefficients (gathered per query); those of its derivatives
+        # are added on the first call with nu >= 1 (:meth:`_coefs`)
+        self._coef = coefficient_tables(D, n, 0)
 
     # ------------------------------------------------------------------
     def _setup_cover(self, cover, basis, metric, rho, R, domain, gauge_kw):
@@ -284,6 +285,12 @@ class GERBSInterpolator:
             raise InvalidParameterError("x", f"last axis must have length n={self.n}, got shape {x.shape}")
         return x
 
+    def _coefs(self, nu):
+        """[C0, C1, C2][: nu + 1] of :func:`~gerbs_core.scattered.taylor.coefficient_tables`."""
+        if len(self._coef) <= nu:
+            self._coef = coefficient_tables(self.D, self.n, 2)
+        return self._coef[: nu + 1]
+
     # ------------------------------------------------------------------ evaluation
     def memory_estimate(self, M, nu=0):
         """Bytes a call with M query points needs at peak (an upper bound): the output,
@@ -325,7 +332,7 @@ class GERBSInterpolator:
         if isinstance(self.cover, DelaunayStarCover):
             deg = np.diff(self.cover.star_ptr)
             pairs = int(deg[np.maximum(idx, 0)].sum(axis=1).max()) if idx.size else 0
-        coefs = sum(c[0, 0].size for c in self._coef[: nu + 1])
+        coefs = sum(c[0, 0].size for c in self._coefs(nu))
         rb = _budget.row_bytes(idx.shape[1], self.n, self._V, nu, coefs, pairs)
         step = int(max(1, self._work // rb))
         if step >= len(x):
@@ -340,7 +347,7 @@ class GERBSInterpolator:
         idx, Bv, Bg, Bh = self._basis(x, idx, edge, nu)
         j = np.maximum(idx, 0)
         mono = monomials(x[:, None, :] - self.points[j], self.degree)     # (M, K, Q)
-        C = self._coef
+        C = self._coefs(nu)
         bad = ~np.all(np.isfinite(Bv), axis=1)
         Bv = np.where(np.isfinite(Bv), Bv, 0.0)
         if nu == 0:

@@ -43,7 +43,7 @@ __all__ = ["check_points", "nearest_distances", "auto_rho", "auto_R", "validate_
 def check_points(points, name="points", min_points=1, return_tree=False):
     """Return a float64 copy (N, n) of ``points``; raise on bad shapes, NaN/inf,
     duplicates (InvalidPointSetError naming the indices) or too few points.
-    ``return_tree``: also return the cKDTree built for the duplicate check (or None)."""
+    ``return_tree``: also return a cKDTree of the points (None for one point)."""
     p = np.array(points, dtype=float, copy=True)
     if p.ndim == 1:
         p = p[:, None]
@@ -54,14 +54,24 @@ def check_points(points, name="points", min_points=1, return_tree=False):
     bad = np.flatnonzero(~np.all(np.isfinite(p), axis=1))
     if bad.size:
         raise InvalidPointSetError(f"{name}: non-finite coordinates (NaN or inf) at indices", bad)
-    tree = None
     if p.shape[0] > 1:
-        tree = cKDTree(p)
-        d, j = tree.query(p, k=2)
-        dup = np.flatnonzero(d[:, 1] == 0.0)
+        dup = _duplicates(p)
         if dup.size:
             raise InvalidPointSetError(f"{name}: duplicate points at indices", dup)
-    return (p, tree) if return_tree else p
+    if not return_tree:
+        return p
+    return p, (cKDTree(p) if p.shape[0] > 1 else None)
+
+
+def _duplicates(p):
+    """Sorted indices of the points equal to another one (distance exactly 0): equal
+    rows are adjacent in lexicographic order (4x cheaper than a 2-NN query)."""
+    o = np.lexsort(p.T[::-1])
+    same = np.all(p[o[1:]] == p[o[:-1]], axis=1)
+    dup = np.zeros(p.shape[0], bool)
+    dup[o[1:][same]] = True
+    dup[o[:-1][same]] = True
+    return np.flatnonzero(dup)
 
 
 def _tree_for(points, metric, tree):

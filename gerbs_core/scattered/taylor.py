@@ -110,14 +110,22 @@ def _default_neighbors(M):
 
 def _monomials(pw, alphas, fact):
     """u^alpha / alpha! as a contiguous (c, M, K) array (one row per alpha), from the
-    powers pw[k] = u^k of shape (n, c, K)."""
-    out = np.empty(pw[0].shape[1:2] + (len(alphas),) + pw[0].shape[2:])
+    powers pw[k] = u^k (k >= 1) of shape (n, c, K) (pw[0] unused).
+
+    Factors u_k^0 = 1 are skipped, not multiplied (exact either way), and the last
+    product is written in place: about half the passes of the plain products."""
+    shape = pw[1].shape
+    out = np.empty(shape[1:2] + (len(alphas),) + shape[2:])
     for j, a in enumerate(alphas):
-        m = pw[a[0]][0] * (1.0 / fact[j])
-        for k in range(1, len(a)):
-            if a[k]:
-                m = m * pw[a[k]][k]
-        out[:, j, :] = m
+        dst = out[:, j, :]
+        live = [k for k in range(len(a)) if a[k]]
+        inv = 1.0 / fact[j]
+        if not live:
+            dst[...] = inv
+            continue
+        m = inv
+        for i, k in enumerate(live):
+            m = np.multiply(pw[a[k]][k], m, out=dst if i == len(live) - 1 else None)
     return out
 
 
@@ -144,15 +152,20 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
     if chunk is None:
         rows = K * (1 + (n if known >= 1 else 0))
         per_point = 8 * (rows * (3 * M + 2 * V + 3 * n + 4) + M * (M + V) * 3)
-        chunk = int(max(64, min(N, work_bytes // per_point)))
+        # a chunk's working arrays stay cache-sized (~16 MB, ~2000 points in the plane:
+        # measured fastest; 10x larger chunks were 2x slower)
+        chunk = int(max(64, min(N, work_bytes // per_point, 16e6 // per_point)))
     order = np.array(alphas, dtype=float).sum(1)
+    # visit the points in the tree's own order (its leaves' order): neighbouring
+    # queries share the tree's paths and the gathered rows (k-NN 25 % faster at 10^5)
+    visit = tree.indices if len(tree.indices) == N else np.arange(N)
     out_coeffs = np.empty((M, N, V))
     for s in range(0, N, chunk):
-        e = min(N, s + chunk)
-        dist, nb = tree.query(points[s:e], k=K + 1)
+        rows = visit[s:s + chunk]
+        dist, nb = tree.query(points[rows], k=K + 1)
         h = dist[:, -1]
-        c = _fit_chunk(points, D_known, s, e, nb[:, 1:], h, alphas, fit_degree)
-        out_coeffs[:, s:e, :] = (c / h[:, None, None] ** order[None, :, None]).transpose(1, 0, 2)
+        c = _fit_chunk(points, D_known, rows, nb[:, 1:], h, alphas, fit_degree)
+        out_coeffs[:, rows, :] = (c / h[:, None, None] ** order[None, :, None]).transpose(1, 0, 2)
     return tensors_from_coeffs(list(out_coeffs), alphas, n, fit_degree)
 
 
@@ -168,10 +181,10 @@ def _neighbour_count(N, n, M, fit_degree, n_neighbors):
     return min(K, N - 1)
 
 
-def _fit_chunk(points, D_known, s, e, nb, h, alphas, fit_degree):
-    """The scaled coefficients c_alpha (c, M, V) of points s..e from their neighbours
+def _fit_chunk(points, D_known, rows, nb, h, alphas, fit_degree):
+    """The scaled coefficients c_alpha (c, M, V) of the points ``rows`` (c,) from their neighbours
     nb (c, K), h (c,) the farthest neighbour's distance (module docstring's model)."""
-    A, B, W = _equations(points, D_known, s, e, nb, h, alphas, fit_degree)
+    A, B, W = _equations(points, D_known, rows, nb, h, alphas, fit_degree)
     At = np.concatenate(A, axis=2) if len(A) > 1 else A[0]                 # (c, M, rows)
     B = np.concatenate(B, axis=1)
     W = np.concatenate(W, axis=1)
@@ -180,27 +193,34 @@ def _fit_chunk(points, D_known, s, e, nb, h, alphas, fit_degree):
     G = np.matmul(AWt, np.swapaxes(At, 1, 2))
     M = G.shape[1]
     tr = np.trace(G, axis1=1, axis2=2)
-    G += (1e-12 * tr / M)[:, None, None] * np.eye(M)
+    diag = G.reshape(len(G), M * M)[:, :: M + 1]      # a view of the diagonals
+    diag += (1e-12 * tr / M)[:, None]
     return np.linalg.solve(G, np.matmul(AWt, B))                           # (c, M, V)
 
 
-def _equations(points, D_known, s, e, nb, h, alphas, fit_degree):
-    """Weighted least-squares equations of points s..e: lists of design blocks
+def _equations(points, D_known, rows, nb, h, alphas, fit_degree):
+    """Weighted least-squares equations of the points ``rows`` (c,): lists of design blocks
     (c, M, K), right-hand sides (c, K, V) and weights (c, K): the values, then (with
     known gradients) one block per gradient component."""
     n = points.shape[1]
     known = len(D_known) - 1
     expo = np.array(alphas, dtype=float)                                   # (M, n)
-    fact = np.array([np.prod([math.factorial(a) for a in al]) for al in alphas])
-    dx = points[nb] - points[s:e, None, :]                                  # (c, K, n)
-    u = dx / h[:, None, None]
-    r = np.linalg.norm(u, axis=-1)
-    w = (1.0 - (r / 1.2) ** 2) ** 2
-    Dloc = [Dk[s:e, None] for Dk in D_known]                               # broadcast over K
-    Tv, Tg, _ = taylor_jet(Dloc, dx, 1 if known >= 1 else 0)
-    ut = np.ascontiguousarray(np.moveaxis(u, -1, 0))                       # (n, c, K)
-    pw = [np.ones(ut.shape)]
-    for _ in range(fit_degree):
+    fact = np.array([math.prod(math.factorial(a) for a in al) for al in alphas], dtype=float)
+    # offsets and u = dx / h coordinate-major (n, c, K): contiguous gathers and rows
+    pt = np.ascontiguousarray(points[rows].T)
+    dxt = np.stack([points[:, k][nb] - pt[k][:, None] for k in range(n)])
+    ut = dxt / h[None, :, None]
+    r2 = ut[0] * ut[0]
+    for k in range(1, n):
+        r2 += ut[k] * ut[k]
+    w = (1.0 - (np.sqrt(r2) / 1.2) ** 2) ** 2
+    if known >= 1:
+        Dloc = [Dk[rows, None] for Dk in D_known]                           # broadcast over K
+        Tv, Tg, _ = taylor_jet(Dloc, np.ascontiguousarray(np.moveaxis(dxt, 0, -1)), 1)
+    else:
+        Tv = D_known[0][rows, None]                                        # T = f(x_i)
+    pw = [None, ut]
+    for _ in range(fit_degree - 1):
         pw.append(pw[-1] * ut)                                             # u^k per coordinate
     A = [_monomials(pw, alphas, fact)]                                     # (c, M, K)
     B = [D_known[0][nb] - Tv]                                              # (c, K, V)

@@ -44,6 +44,8 @@ VARIANTS = {
     "energy-res-5": {"fairness": gerbs_core.FairnessRule(resolution=5)},
     # star covers without the spoke caps of sliver fans (gerbs_core.mesh.spoke_caps)
     "no-caps": {"spoke_caps": False},
+    # without the extra candidate at spread stars (gerbs_core.mesh.spread_fits)
+    "no-spread": {"fairness": gerbs_core.FairnessRule(spread=180.0)},
 }
 
 

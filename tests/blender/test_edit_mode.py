@@ -55,13 +55,40 @@ def _statuses():
     return dict(engine.stats)
 
 
+def _reads():
+    """How often the sync read everything of the input, or only its positions."""
+    from blender_addon import stack
+    return {k: stack.reads[k] for k in ("full", "positions")}
+
+
+def _more(before, after):
+    return {k: after[k] - before[k] for k in before}
+
+
+def _record_positions(mod):
+    """The positions the result's record holds (the add-on's own mesh: safe to read)."""
+    from blender_addon import geometry_nodes as gn
+    from blender_addon import ids
+
+    mesh = gn.get_result(mod).data
+    buf = np.empty((len(mesh.vertices), 3), dtype=np.float32)
+    mesh.attributes[ids.SNAP_POSITION].data.foreach_get("vector", buf.ravel())
+    return buf
+
+
+def _bm_mesh(bm):
+    """(positions (V, 3) float32, faces) of the edit mesh, read from the BMesh."""
+    X = np.array([v.co[:] for v in bm.verts], dtype=np.float32)
+    return X, [[v.index for v in f.verts] for f in bm.faces]
+
+
 def test_selection_changes_do_no_sync_work(blender, monkeypatch):
     from blender_addon import geometry_nodes as gn
     from blender_addon import ids, snapshot
 
     obj, mod, bm, X, P0 = _edit()
     reads = _Counter(monkeypatch, snapshot, "read_snapshot")
-    before = _statuses()
+    before, inputs = _statuses(), _reads()
     # what the select operators do (ID_RECALC_SELECT: a shading-only update): no sync
     bpy.ops.mesh.select_all(action="SELECT")
     bpy.ops.mesh.select_all(action="DESELECT")
@@ -76,6 +103,7 @@ def test_selection_changes_do_no_sync_work(blender, monkeypatch):
     assert {k: v for k, v in after.items() if k != "unchanged"} == \
         {k: v for k, v in before.items() if k != "unchanged"}
     assert reads.calls == 0
+    assert _reads() == inputs  # nothing of the mesh was read either
     # control: a record the state did not write (as after an undo) is read back
     gn.get_result(mod).data[ids.RECORD_STAMP] = "restored by undo"
     bm.verts[5].select_set(False)
@@ -118,4 +146,70 @@ def test_moved_vertices_update_like_a_fresh_build(blender, after):
         assert st.partial_updates == step + 1  # only the moved vertex's columns
     assert np.abs(P - P0).max() > 0.05
     assert _statuses().get("rebuilt", 0) == rebuilt
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_a_move_reads_only_positions_and_writes_the_fresh_result(blender):
+    """A position edit in Edit Mode: the channel says the topology and layers are the
+    record's, so only positions are read; the record then holds exactly the new
+    positions (written vertex by vertex), and the surface is a fresh build's to float32
+    round-off, also when the moved set changes and when the result's record is not the
+    one the state wrote (then written whole)."""
+    from blender_addon import geometry_nodes as gn
+    from blender_addon import ids
+
+    obj, mod, bm, X, P0 = _edit()
+    for step, verts in enumerate(([3], [3, 17], [17])):
+        if step == 2:  # control: as after an undo, the stamp is not the state's
+            gn.get_result(mod).data[ids.RECORD_STAMP] = "restored by undo"
+        before = _reads()
+        for v in verts:
+            bm.verts[v].co.z += 0.05 * (step + 1)
+        P = _update(obj)
+        assert _more(before, _reads()) == {"full": 0, "positions": 1}
+        X_new, _ = _bm_mesh(bm)
+        assert np.array_equal(_record_positions(mod)[:len(X_new)], X_new)
+        fresh = _expected(obj, X, X_new.astype(np.float64)).astype(np.float32)
+        assert np.abs(P - fresh).max() <= 4 * np.spacing(np.float32(np.abs(fresh).max()))
+    assert np.abs(P - P0).max() > 0.05
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_edits_other_than_positions_are_read_in_full(blender, monkeypatch):
+    """What the channel must not call "positions only": an edge rotation (same counts of
+    everything, other faces: a rebuild of the new faces; the face sizes come from the
+    channel, not from Blender's per-face loop_start) and a UV edit (a carried layer:
+    mapped again, no rebuild)."""
+    from gerbs_core import BlendingSurface
+
+    from blender_addon import mesh_io
+
+    obj, mod, bm, X, P0 = _edit()
+    before, rebuilt = _reads(), _statuses().get("rebuilt", 0)
+    per_face, inner = [], mesh_io._get
+
+    def counted(collection, name, *args):
+        per_face.append(name)
+        return inner(collection, name, *args)
+
+    monkeypatch.setattr(mesh_io, "_get", counted)
+    bm.edges.ensure_lookup_table()
+    assert bmesh.ops.rotate_edges(bm, edges=[bm.edges[10]], use_ccw=False)["edges"]
+    bm.faces.index_update()
+    bm.faces.ensure_lookup_table()
+    P = _update(obj)
+    assert _more(before, _reads()) == {"full": 1, "positions": 0}
+    assert "value" in per_face and "loop_start" not in per_face  # read, but not per face
+    assert _statuses().get("rebuilt", 0) == rebuilt + 1
+    X_new, faces = _bm_mesh(bm)
+    assert len(faces) == 80 and len(bm.edges) == 120  # the counts are the icosphere's
+    fresh = BlendingSurface(X_new.astype(np.float64), np.array(faces)).tessellate(R)[0]
+    assert np.abs(P - fresh).max() <= 1e-5 and np.abs(P - P0).max() > 1e-3
+    before, statuses = _reads(), _statuses()
+    uv = bm.loops.layers.uv.active
+    bm.faces[0].loops[0][uv].uv.x += 0.25
+    assert np.array_equal(_update(obj), P)
+    assert _more(before, _reads()) == {"full": 1, "positions": 0}
+    assert _statuses().get("updated", 0) == statuses.get("updated", 0) + 1
+    assert _statuses().get("rebuilt", 0) == rebuilt + 1
     bpy.ops.object.mode_set(mode="OBJECT")

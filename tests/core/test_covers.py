@@ -231,3 +231,27 @@ def test_envelope_bounds_dense_on_a_large_cover():
     # one transition per corner, inside the two edges
     assert np.all(cov.L + cov.R <= cov.delta * (1 + 1e-12))
     assert np.all(cov.R[cov.next_edge >= 0] > 0) and np.all(cov.L[cov.prev_edge >= 0] > 0)
+
+
+def test_vectorized_barycentric_transforms_match_scipy():
+    """delaunay_triangulation fills scipy's transform cache itself: equal to scipy's own
+    to rounding (relative to the inverse's size), same point location, NaN on a
+    degenerate (zero-area) triangle."""
+    from scipy.spatial import Delaunay
+    from gerbs_core.scattered.covers import _set_transforms, delaunay_triangulation
+    rng = np.random.default_rng(4)
+    P = np.concatenate([rng.random((400, 2)), 0.5 + 1e-3 * rng.normal(size=(200, 2))])
+    tri = delaunay_triangulation(P)[0]
+    assert tri._transform is not None      # filled before any find_simplex (this scipy)
+    ref = Delaunay(P).transform
+    scale = np.abs(ref).max(axis=(1, 2), keepdims=True)
+    assert np.max(np.abs(tri.transform - ref) / scale) < 1e-12
+    X = rng.random((5000, 2)) * 1.2 - 0.1
+    assert np.array_equal(tri.find_simplex(X, tol=1e-12), Delaunay(P).find_simplex(X, tol=1e-12))
+
+    class Flat:                   # a zero-area triangle among good ones
+        simplices = np.array([[0, 1, 2], [0, 1, 3]])
+        _transform = None
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [0.0, 1.0]])
+    _set_transforms(Flat, pts)
+    assert np.isnan(Flat._transform[0]).all() and np.isfinite(Flat._transform[1]).all()

@@ -122,3 +122,14 @@ def test_validate_radii_constraints_16_17():
         validate_radii(0.5 * d, R, d)
     with pytest.raises(InvalidParameterError, match="> 0"):
         validate_radii(-d, d, d)
+
+
+def test_duplicates_match_a_nearest_neighbour_search():
+    """check_points' lexicographic duplicate search flags exactly the points at
+    distance 0 from another one (groups of any size, -0.0 == 0.0)."""
+    from scipy.spatial import cKDTree
+    from gerbs_core.scattered.radii import _duplicates
+    P = np.random.default_rng(2).integers(0, 25, (3000, 3)).astype(float)
+    d = cKDTree(P).query(P, k=2)[0][:, 1]
+    assert np.array_equal(_duplicates(P), np.flatnonzero(d == 0.0))
+    assert _duplicates(np.array([[0.0, 1.0], [2.0, 2.0], [-0.0, 1.0]])).tolist() == [0, 2]

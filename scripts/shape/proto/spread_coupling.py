@@ -12,20 +12,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 from shape.patching import patching, run_variant  # noqa: E402
 import gerbs_core.mesh.agreement as ag  # noqa: E402
 import gerbs_core.mesh.coupling as cp  # noqa: E402
+from gerbs_core.mesh.spread_fits import star_spread  # noqa: E402
 
 OPTS = {"beta": 3.0, "spread": 60.0, "topo": None, "X": None, "rows": "face"}
-
-
-def star_spread(topo, X):
-    fn = ag.face_normals(topo, X)
-    cf, fv = topo.corner_face, topo.face_vertices
-    vn = np.zeros((topo.n_vertices, 3))
-    np.add.at(vn, fv, fn[cf])
-    vn /= np.linalg.norm(vn, axis=1, keepdims=True)
-    ang = np.degrees(np.arccos(np.clip((vn[fv] * fn[cf]).sum(1), -1, 1)))
-    out = np.zeros(topo.n_vertices)
-    np.maximum.at(out, fv, ang)
-    return out
 
 
 def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None, _old=cp.coupled_fits):
