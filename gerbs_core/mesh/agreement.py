@@ -49,12 +49,13 @@ from .cover import require_cover
 from .coupling import coupled_fits, identity_fits
 from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomials, n_monomials
+from .row_values import (candidate_coefs, candidate_values, chunks, per_degree,
+                         rows_apply as _rows_apply)  # noqa: F401 (the prototypes' name)
 from .spread_fits import SPREAD, gate, spread_candidates
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
 
 DMAX = 4                      # the highest degree of a local function
-CHUNK_ROWS = 8192             # rows per chunk of the energies' row-by-row work
 MMAX = n_monomials(DMAX)      # coefficients per vertex in the padded layout
 
 
@@ -183,7 +184,7 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
         Psi, y = np.empty(c.shape), np.empty(c.shape + (2,))
         eps = np.inf
         # in chunks of samples (cache-sized temporaries), written back in the rows' order
-        for j in _chunks(len(sel)):
+        for j in chunks(len(sel)):
             psi, pol = cover.psi_jet(charts, c[:, j], x[sel[j]][None], 0)
             eps = min(eps, float(psi[0].max(axis=0).min()))
             Psi[:, j] = partition_jet(psi, 0)[0]
@@ -212,57 +213,6 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     return _Samples(sample, vertex, y, face, psi, sharp_face[face], Bu, Bs, weight, cage, L)
 
 
-def _row_matrix(B, vertex, V):
-    """csr (SC, V M) with row s holding B[s] (SC, M) in the columns vertex[s] M + m: the
-    sample rows' local functions as one sparse product with coefficients (V M, k)."""
-    SC, M = B.shape
-    it = np.int32 if V * M < 2 ** 31 - 1 else np.int64      # scipy's own index type
-    cols = (vertex.astype(it)[:, None] * it(M) + np.arange(M, dtype=it)).ravel()
-    return sp.csr_matrix((np.ascontiguousarray(B).ravel(), cols,
-                          np.arange(0, SC * M + 1, M, dtype=it)), shape=(SC, V * M))
-
-
-def _rows_apply(B, vertex, coef):
-    """sum_m B[s, m] coef[vertex[s] M + m] (SC, 3) for per-row monomial values B (SC, M) and
-    coefficients coef (V M, 3): one sparse product (no (SC, M, 3) temporaries)."""
-    return _row_matrix(B, vertex, coef.shape[0] // B.shape[1]) @ coef
-
-
-def _candidate_coefs(cands, X):
-    """Every candidate's coefficients (V M, 3) at positions X: computed once for the fold
-    penalty and the choice."""
-    return [(c.matrix @ X).reshape(-1, 3) for c in cands]
-
-
-def _per_degree(cands, coefs, B, vertex):
-    """Yields (i, _rows_apply(B[:, :M], vertex, coefs[i])) for every candidate i, M its
-    coefficient count: one row matrix serves all candidates of a size."""
-    V = cands[0].matrix.shape[1]
-    sizes = [n_monomials(c.degree) for c in cands]
-    for M in sorted(set(sizes)):
-        rows = _row_matrix(B[:, :M], vertex, V)
-        for i in np.flatnonzero(np.array(sizes) == M).tolist():
-            yield i, rows @ coefs[i]
-
-
-def _chunks(n):
-    """Slices of CHUNK_ROWS of n rows (sample-corner rows, or samples): row-by-row work in
-    cache-sized pieces (measured: whole arrays made the fold penalty's time per row 2x
-    larger on a 128x128 grid than on a 64x64 one)."""
-    return [slice(s, min(n, s + CHUNK_ROWS)) for s in range(0, n, CHUNK_ROWS)]
-
-
-def _candidate_values(cands, X, vertex, Bu, coefs=None):
-    """Values (SC, ncand, 3) of every candidate local function at the sample corners."""
-    coefs = _candidate_coefs(cands, X) if coefs is None else coefs
-    out = np.empty((len(vertex), len(cands), 3))
-    for sl in _chunks(len(vertex)):
-        Xs = X[vertex[sl]]
-        for i, v in _per_degree(cands, coefs, Bu[sl], vertex[sl]):
-            out[sl, i] = Xs + v
-    return out
-
-
 def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
     """(SC, ncand): fold h_v^2 w P max(0, fold_cos - cos(n_l(p), n_f))^2 per row and
     candidate, n_l the candidate's normal at the row's chart point, n_f its face's rest
@@ -271,14 +221,14 @@ def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
     out = np.zeros((len(smp.vertex), len(cands)))
     if not rule.fold:
         return out
-    coefs = _candidate_coefs(cands, X) if coefs is None else coefs
+    coefs = candidate_coefs(cands, X) if coefs is None else coefs
     dmax = max(c.degree for c in cands)
-    for sl in _chunks(len(smp.vertex)):
+    for sl in chunks(len(smp.vertex)):
         nf, vert = fn[smp.face[sl]], smp.vertex[sl]
         SC = len(vert)
         dm = monomials(smp.y[sl], dmax, 1)[1]                       # (SC, M, 2)
         dm = np.concatenate([dm[..., 0], dm[..., 1]])               # (2 SC, M): d/dy1, d/dy2
-        for i, d in _per_degree(cands, coefs, dm, np.concatenate([vert, vert])):
+        for i, d in per_degree(cands, coefs, dm, np.concatenate([vert, vert])):
             n = np.cross(d[:SC], d[SC:])
             n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
             out[sl, i] = np.maximum(0.0, rule.fold_cos - np.einsum("ij,ij->i", n, nf)) ** 2
@@ -289,13 +239,13 @@ def _choose(cands, X, smp, rule, V, penalty, coefs=None):
     """The candidate of every vertex (V,): least mu * agreement + lam * tension + the fold
     ``penalty`` (SC, ncand) (rest shape); coefs: the candidates' coefficients at X (made
     here if not given)."""
-    vals = _candidate_values(cands, X, smp.vertex, smp.Bu, coefs)
+    vals = candidate_values(cands, X, smp.vertex, smp.Bu, coefs)
     cage = (smp.cage @ X)[smp.sample]
     # per sample, not per face (unlike the coupling): measured Suzanne 126 pairs above
     # 60 degrees against 156 with the per-face weights
     P = smp.psi
     tension = np.empty(penalty.shape)
-    for sl in _chunks(len(P)):               # row by row: cache-sized temporaries
+    for sl in chunks(len(P)):               # row by row: cache-sized temporaries
         tension[sl] = (rule.lam * (smp.sharp[sl] * P[sl])[:, None]
                        * ((vals[sl] - cage[sl, None]) ** 2).sum(-1))
     tension += penalty
@@ -309,7 +259,7 @@ def _choose(cands, X, smp, rule, V, penalty, coefs=None):
         S = np.stack([np.bincount(smp.sample, cur[:, k], minlength=smp.n_samples)
                       for k in range(3)], 1)
         others = S[smp.sample] - cur                           # sum of the other slots
-        for sl in _chunks(len(P)):
+        for sl in chunks(len(P)):
             gap = one[sl, None, None] * vals[sl] - others[sl, None, :]   # (1 - Psi) (l - T)
             energy[sl] = scale[sl, None] * (gap ** 2).sum(-1) + tension[sl]
         E = np.stack([np.bincount(smp.vertex, energy[:, i], minlength=V)
@@ -345,7 +295,7 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
         sharp = face_sharpness(topo, X, rule.sharp_from, rule.sharp_to)
     smp = _samples(topo, charts, corners2d, cover, rings.h, rule.resolution, sharp)
     if len(cands) > 1:
-        coefs = _candidate_coefs(cands, X)
+        coefs = candidate_coefs(cands, X)
         penalty = _fold_penalty(cands, X, smp, face_normals(topo, X), rings.h, rule, coefs)
         penalty = gate(penalty, smp.vertex, len(extra), spiky)
         choice = _choose(cands, X, smp, rule, V, penalty, coefs)
