@@ -186,46 +186,44 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
 
 
 def _compact(vs, use, q, A, bw):
-    """One chunk's csr rows in compact form (vs, cols (K, r), nr (K,), vals (K, M, r),
-    hvals (K, M, r)): vertex k's rows hold its nr[k] distinct columns -- the used data
-    ids q (K, n) and the pin (column v, minus the row's sum) -- by increasing column,
-    with the operator values A and the right-hand-side values bw (K, M, n; zero off the
-    used data); a vertex reached by several unfoldings is one entry, its values summed
-    in ring order. All rows of a vertex share its columns: one sort per vertex."""
+    """One chunk's csr rows: vertex k's rows hold the used data ids q (K, n) and the pin
+    (column v, minus the row's sum) with the operator values A and the right-hand-side
+    values bw (K, M, n; zero off the used data). Compact form (vs, cols (K, r), nr (K,),
+    vals (K, M, r), hvals (K, M, r)) -- the nr[k] columns by increasing column, one sort
+    per vertex (all rows of a vertex share its columns) -- when no vertex is reached by
+    several unfoldings (grids, flat meshes); else coordinates (rows, cols, vals, hvals),
+    data then pins, for scipy to sort and sum (``rows`` an int array marks this form)."""
     V = np.iinfo(np.int64).max
     cols = np.concatenate([np.where(use, q, V), vs[:, None]], axis=1)  # unused: last
     order = np.argsort(cols, axis=1, kind="stable")
     cols = np.take_along_axis(cols, order, axis=1)
-    head = np.ones(cols.shape, dtype=bool)
-    head[:, 1:] = cols[:, 1:] != cols[:, :-1]
-    head &= cols < V
-    nr = head.sum(1)
+    if np.any((cols[:, 1:] == cols[:, :-1]) & (cols[:, 1:] < V)):
+        K, M, _ = A.shape
+        kk, nn = np.nonzero(use)
+        r = vs[:, None] * M + np.arange(M)
+        return (np.concatenate([r[kk].ravel(), r.ravel()]),
+                np.concatenate([np.repeat(q[kk, nn], M), np.repeat(vs, M)]),
+                np.concatenate([A[kk, :, nn].ravel(), -A.sum(2).ravel()]),
+                np.concatenate([bw[kk, :, nn].ravel(), -bw.sum(2).ravel()]))
+    nr = (cols < V).sum(1)
     r = int(nr.max())
-    out = []
-    unique = np.array_equal(nr, (cols < V).sum(1))     # no repeated column (the rule)
-    for X in (A, bw):
-        X = np.concatenate([X, -X.sum(2, keepdims=True)], axis=2)
-        if unique:
-            out.append(np.take_along_axis(X, order[:, None, :r], axis=2))
-            continue
-        # every run summed from its head (in order; a row's trailing unused slots add
-        # zeros, exactly): one reduceat over the sorted rows
-        X = np.take_along_axis(X, order[:, None, :], axis=2)
-        K, M, n1 = X.shape
-        heads = np.broadcast_to(head[:, None, :], X.shape)
-        sums = np.add.reduceat(X.ravel(), np.flatnonzero(heads.ravel()))
-        c = np.zeros((K, M, r))
-        c[np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], c.shape)] = sums
-        out.append(c)
-    if not unique:
-        cols = np.take_along_axis(cols, np.argsort(~head, axis=1, kind="stable"), axis=1)
-    return vs, cols[:, :r], nr, out[0], out[1]
+    X = np.concatenate([A, bw], axis=1)                 # A and bw with their pins, stacked
+    X = np.concatenate([X, np.concatenate([-A.sum(2), -bw.sum(2)], axis=1)[..., None]], axis=2)
+    X = np.take_along_axis(X, order[:, None, :r], axis=2)
+    M = A.shape[1]
+    return vs, cols[:, :r], nr, X[:, :M], X[:, M:]
 
 
 def _block_rows(blocks, V, M):
     """The operator and right-hand-side csr matrices (V M, V), canonical, from the chunks'
-    compact rows (:func:`_compact`): the rows' lengths are known, so every chunk is
-    written straight into the csr arrays (no coordinate sort)."""
+    rows (:func:`_compact`): all compact -- the rows' lengths known -- written straight
+    into the csr arrays; else every chunk as coordinates, sorted and summed by scipy."""
+    shape = (V * M, V)
+    if any(len(b) == 4 for b in blocks):
+        parts = [b if len(b) == 4 else _coordinates(*b, M) for b in blocks]
+        rows, cols = (np.concatenate([p[i] for p in parts]) for i in (0, 1))
+        return tuple(sp.csr_matrix((np.concatenate([p[i] for p in parts]), (rows, cols)),
+                                   shape=shape) for i in (2, 3))
     nrow = np.zeros(V, dtype=np.int64)
     for vs, _, nr, _, _ in blocks:
         nrow[vs] = nr
@@ -235,18 +233,31 @@ def _block_rows(blocks, V, M):
     indices = np.empty(nnz, dtype=np.int32 if V < 2 ** 31 - 1 else np.int64)
     out = [np.empty(nnz), np.empty(nnz)]
     for vs, cols, nr, vals, hvals in blocks:
-        r = cols.shape[1]
-        pos = indptr[:-1][vs[:, None] * M + np.arange(M)][:, :, None] + np.arange(r)
-        ok = np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], pos.shape)
+        pos, ok = _slots(indptr, vs, nr, cols.shape[1], M)
         full = bool(ok.all())
         where = pos.ravel() if full else pos[ok]
         c = np.broadcast_to(cols[:, None, :], pos.shape)
         indices[where] = c.ravel() if full else c[ok]
         for o, X in zip(out, (vals, hvals)):
             o[where] = X.ravel() if full else X[ok]
-    shape = (V * M, V)
     return (sp.csr_matrix((out[0], indices, indptr), shape=shape),
             sp.csr_matrix((out[1], indices.copy(), indptr.copy()), shape=shape))
+
+
+def _slots(indptr, vs, nr, r, M):
+    """(pos (K, M, r), ok (K, M, r)): csr positions of the compact entries, and which are
+    real (slot < nr)."""
+    pos = indptr[:-1][vs[:, None] * M + np.arange(M)][:, :, None] + np.arange(r)
+    ok = np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], pos.shape)
+    return pos, ok
+
+
+def _coordinates(vs, cols, nr, vals, hvals, M):
+    """A compact chunk (:func:`_compact`) as coordinates (rows, cols, vals, hvals)."""
+    r = cols.shape[1]
+    rows = np.broadcast_to((vs[:, None] * M + np.arange(M))[:, :, None], vals.shape)
+    ok = np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], vals.shape)
+    return rows[ok], np.broadcast_to(cols[:, None, :], vals.shape)[ok], vals[ok], hvals[ok]
 
 
 def _ranges(starts, counts):
