@@ -47,8 +47,10 @@ import scipy.sparse as sp
 from ..gauge.jet import partition_jet
 from .cover import require_cover
 from .coupling import coupled_fits, identity_fits
-from .fits import CANDIDATES, candidate_fits_all
+from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomials, n_monomials
+from .row_values import (candidate_coefs, candidate_values, chunks, per_degree,
+                         rows_apply as _rows_apply)  # noqa: F401 (the prototypes' name)
 from .spread_fits import SPREAD, gate, spread_candidates
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
@@ -179,11 +181,16 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     for n in np.unique(topo.face_sizes).tolist():
         sel = np.flatnonzero(topo.face_sizes[lf] == n)
         c = topo.face_offsets[lf[sel]][None, :] + np.arange(n)[:, None]   # (n, Ln)
-        psi, _ = cover.psi_jet(charts, c, x[sel][None], 0)
-        require_cover(float(psi[0].max(axis=0).min()), cover.kernel)
-        Psi = partition_jet(psi, 0)[0]
+        Psi, y = np.empty(c.shape), np.empty(c.shape + (2,))
+        eps = np.inf
+        # in chunks of samples (cache-sized temporaries), written back in the rows' order
+        for j in chunks(len(sel)):
+            psi, pol = cover.psi_jet(charts, c[:, j], x[sel[j]][None], 0)
+            eps = min(eps, float(psi[0].max(axis=0).min()))
+            Psi[:, j] = partition_jet(psi, 0)[0]
+            y[:, j] = charts.to_chart(c[:, j], x[sel[j]][None], pol=pol)[0]
+        require_cover(eps, cover.kernel)
         v = topo.face_vertices[c]
-        y = charts.to_chart(c, x[sel][None])[0]
         # rows with Psi = 0 (outside the vertex's support) or Psi = 1 (at the vertex: l_v = X_v
         # = the cage there) add exactly nothing to any energy: dropped (35-45% of the rows)
         live = (Psi > 0.0) & (Psi < 1.0)
@@ -194,7 +201,7 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     y = np.concatenate([p[3] for p in parts])
     Bu = monomials(y, DMAX)[0]
     deg = monomial_exponents(DMAX).sum(1)
-    Bs = Bu / h[vertex][:, None] ** deg[None, :]
+    Bs = Bu / (h[:, None] ** deg[None, :])[vertex]          # the powers once per vertex
     slot_rows = np.repeat(np.arange(L), cw.shape[1])
     slot_cols = topo.face_vertices[np.minimum(topo.face_offsets[lf][:, None] + np.arange(cw.shape[1]),
                                               topo.face_offsets[lf + 1][:, None] - 1)].ravel()
@@ -206,27 +213,7 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     return _Samples(sample, vertex, y, face, psi, sharp_face[face], Bu, Bs, weight, cage, L)
 
 
-def _rows_apply(B, vertex, coef):
-    """sum_m B[s, m] coef[vertex[s] M + m] (SC, 3) for per-row monomial values B (SC, M) and
-    coefficients coef (V M, 3): one sparse product (no (SC, M, 3) temporaries)."""
-    SC, M = B.shape
-    cols = (vertex[:, None] * M + np.arange(M)).ravel()
-    rows = sp.csr_matrix((np.ascontiguousarray(B).ravel(), cols, np.arange(0, SC * M + 1, M)),
-                         shape=(SC, coef.shape[0]))
-    return rows @ coef
-
-
-def _candidate_values(cands, X, vertex, Bu):
-    """Values (SC, ncand, 3) of every candidate local function at the sample corners."""
-    out = np.empty((len(vertex), len(cands), 3))
-    Xs = X[vertex]
-    for i, c in enumerate(cands):
-        M = n_monomials(c.degree)
-        out[:, i] = Xs + _rows_apply(Bu[:, :M], vertex, (c.matrix @ X).reshape(-1, 3))
-    return out
-
-
-def _fold_penalty(cands, X, smp, fn, h, rule):
+def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
     """(SC, ncand): fold h_v^2 w P max(0, fold_cos - cos(n_l(p), n_f))^2 per row and
     candidate, n_l the candidate's normal at the row's chart point, n_f its face's rest
     normal: it is zero unless the local function turns by more than arccos(fold_cos)
@@ -234,41 +221,47 @@ def _fold_penalty(cands, X, smp, fn, h, rule):
     out = np.zeros((len(smp.vertex), len(cands)))
     if not rule.fold:
         return out
-    nf = fn[smp.face]
-    SC = len(smp.vertex)
-    dm = monomials(smp.y, max(c.degree for c in cands), 1)[1]     # (SC, M, 2)
-    dm = np.concatenate([dm[..., 0], dm[..., 1]])                   # (2 SC, M): d/dy1, d/dy2
-    vv = np.concatenate([smp.vertex, smp.vertex])
-    for i, c in enumerate(cands):
-        M = n_monomials(c.degree)
-        d = _rows_apply(dm[:, :M], vv, (c.matrix @ X).reshape(-1, 3))
-        n = np.cross(d[:SC], d[SC:])
-        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-        out[:, i] = np.maximum(0.0, rule.fold_cos - np.einsum("ij,ij->i", n, nf)) ** 2
+    coefs = candidate_coefs(cands, X) if coefs is None else coefs
+    dmax = max(c.degree for c in cands)
+    for sl in chunks(len(smp.vertex)):
+        nf, vert = fn[smp.face[sl]], smp.vertex[sl]
+        SC = len(vert)
+        dm = monomials(smp.y[sl], dmax, 1)[1]                       # (SC, M, 2)
+        dm = np.concatenate([dm[..., 0], dm[..., 1]])               # (2 SC, M): d/dy1, d/dy2
+        for i, d in per_degree(cands, coefs, dm, np.concatenate([vert, vert])):
+            n = np.cross(d[:SC], d[SC:])
+            n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+            out[sl, i] = np.maximum(0.0, rule.fold_cos - np.einsum("ij,ij->i", n, nf)) ** 2
     return (rule.fold * h[smp.vertex] ** 2 * smp.weight * smp.psi)[:, None] * out
 
 
-def _choose(cands, X, smp, rule, V, penalty):
+def _choose(cands, X, smp, rule, V, penalty, coefs=None):
     """The candidate of every vertex (V,): least mu * agreement + lam * tension + the fold
-    ``penalty`` (SC, ncand) (rest shape)."""
-    vals = _candidate_values(cands, X, smp.vertex, smp.Bu)
+    ``penalty`` (SC, ncand) (rest shape); coefs: the candidates' coefficients at X (made
+    here if not given)."""
+    vals = candidate_values(cands, X, smp.vertex, smp.Bu, coefs)
     cage = (smp.cage @ X)[smp.sample]
     # per sample, not per face (unlike the coupling): measured Suzanne 126 pairs above
     # 60 degrees against 156 with the per-face weights
     P = smp.psi
-    tension = rule.lam * (smp.sharp * P)[:, None] * ((vals - cage[:, None]) ** 2).sum(-1)
+    tension = np.empty(penalty.shape)
+    for sl in chunks(len(P)):               # row by row: cache-sized temporaries
+        tension[sl] = (rule.lam * (smp.sharp[sl] * P[sl])[:, None]
+                       * ((vals[sl] - cage[sl, None]) ** 2).sum(-1))
     tension += penalty
     one = 1.0 - P
     # agreement of row s: P / (1 - P) |(1 - P) l - (T - P l_cur)|^2 (0 where P = 1)
     scale = np.where(one > 1e-12, P / np.where(one > 1e-12, one, 1.0), 0.0)
     choice = np.zeros(V, dtype=np.int64)
+    energy = np.empty(tension.shape)
     for _ in range(rule.choice_rounds):
         cur = P[:, None] * vals[np.arange(len(P)), choice[smp.vertex]]
         S = np.stack([np.bincount(smp.sample, cur[:, k], minlength=smp.n_samples)
                       for k in range(3)], 1)
         others = S[smp.sample] - cur                           # sum of the other slots
-        gap = one[:, None, None] * vals - others[:, None, :]   # (1 - Psi) (l - T)
-        energy = scale[:, None] * (gap ** 2).sum(-1) + tension
+        for sl in chunks(len(P)):
+            gap = one[sl, None, None] * vals[sl] - others[sl, None, :]   # (1 - Psi) (l - T)
+            energy[sl] = scale[sl, None] * (gap ** 2).sum(-1) + tension[sl]
         E = np.stack([np.bincount(smp.vertex, energy[:, i], minlength=V)
                       for i in range(len(cands))], 1)
         new = np.argmin(E, axis=1)        # first minimum: the lower degree on ties
@@ -280,18 +273,8 @@ def _choose(cands, X, smp, rule, V, penalty):
 
 def _chosen(cands, choice, part, V):
     """The rows of each vertex's chosen candidate operator (``part``: "matrix" or "rhs"),
-    in the padded (V*MMAX, V) layout."""
-    rows, cols, vals = [], [], []
-    for i, c in enumerate(cands):
-        M = n_monomials(c.degree)
-        coo = getattr(c, part).tocoo()
-        mine = choice[coo.row // M] == i
-        r = coo.row[mine]
-        rows.append((r // M) * MMAX + r % M)
-        cols.append(coo.col[mine])
-        vals.append(coo.data[mine])
-    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(V * MMAX, V))
+    in the padded (V*MMAX, V) layout (:func:`gerbs_core.mesh.fits.chosen_rows`)."""
+    return chosen_rows(cands, choice, part, V, MMAX)
 
 
 def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, sharp=None,
@@ -312,9 +295,10 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
         sharp = face_sharpness(topo, X, rule.sharp_from, rule.sharp_to)
     smp = _samples(topo, charts, corners2d, cover, rings.h, rule.resolution, sharp)
     if len(cands) > 1:
-        penalty = _fold_penalty(cands, X, smp, face_normals(topo, X), rings.h, rule)
+        coefs = candidate_coefs(cands, X)
+        penalty = _fold_penalty(cands, X, smp, face_normals(topo, X), rings.h, rule, coefs)
         penalty = gate(penalty, smp.vertex, len(extra), spiky)
-        choice = _choose(cands, X, smp, rule, V, penalty)
+        choice = _choose(cands, X, smp, rule, V, penalty, coefs)
     else:
         choice = np.zeros(V, np.int64)
     degrees = np.array([c.degree for c in cands])[choice]

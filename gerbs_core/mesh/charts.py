@@ -24,6 +24,7 @@ derivatives with respect to the face-local coordinates of D_f.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -56,6 +57,15 @@ class VertexCharts:
     corner_vertex: np.ndarray
     rule: str
 
+    # cos and sin of beta, once per corner (every evaluation of a chart rotates by them)
+    @cached_property
+    def _beta_cos(self) -> np.ndarray:
+        return np.cos(self.beta)
+
+    @cached_property
+    def _beta_sin(self) -> np.ndarray:
+        return np.sin(self.beta)
+
     def unfolded(self, corner: np.ndarray, x: np.ndarray):
         """Unscaled unfolded polar coordinates (r, theta) of face points x (...,2).
 
@@ -65,8 +75,7 @@ class VertexCharts:
         """
         corner = np.asarray(corner)
         d = np.asarray(x, dtype=np.float64) - self.origin[corner]
-        b = self.beta[corner]
-        cb, sb = np.cos(b), np.sin(b)
+        cb, sb = self._beta_cos[corner], self._beta_sin[corner]
         a = np.arctan2(cb * d[..., 1] - sb * d[..., 0], cb * d[..., 0] + sb * d[..., 1])
         return np.hypot(d[..., 0], d[..., 1]), self.theta0[corner] + a
 
@@ -79,8 +88,7 @@ class VertexCharts:
         """
         corner = np.asarray(corner)
         d = np.asarray(x, dtype=np.float64) - self.origin[corner]
-        b = self.beta[corner]
-        cb, sb = np.cos(b), np.sin(b)
+        cb, sb = self._beta_cos[corner], self._beta_sin[corner]
         a = np.arctan2(cb * d[..., 1] - sb * d[..., 0], cb * d[..., 0] + sb * d[..., 1])
         if clamp:
             a = np.clip(a, 0.0, self.alpha[corner])

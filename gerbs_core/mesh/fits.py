@@ -18,13 +18,16 @@ the number of data.
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import scipy.sparse as sp
 
 from .monomials import bending_gram, monomial_exponents, monomials, n_monomials
 
 __all__ = ["RCOND", "CANDIDATES", "pinned_normal_inverse", "candidate_fits",
-           "candidate_fits_all", "CandidateFits"]
+           "candidate_fits_all", "CandidateFits", "shared_rows",
+           "chosen_rows"]
 
 # relative eigenvalue cut-off of the normal matrices (in the bending metric, scaled
 # coordinates y / h): a normal-matrix eigenvalue of 1e-8 is a singular value of 1e-4 of
@@ -38,10 +41,44 @@ MAX_CONDITION = 1e4
 # the candidate rules (degree, data rings) each vertex chooses from (mesh.agreement)
 CANDIDATES = ((2, 1), (3, 1), (3, 2), (4, 2))
 
+# data (vertices x padded data count) per chunk of the batched fits
+CHUNK_DATA = 16_384
+
+
+@lru_cache(maxsize=None)
+def _probe(n: int) -> np.ndarray:
+    """A fixed random vector (n,): the grouping key of :func:`shared_rows`."""
+    return np.random.default_rng(0).uniform(0.5, 1.5, n)
+
+
+def shared_rows(N: np.ndarray, fn):
+    """fn(N) for a batch N (K, ...) with fn row by row, evaluated once per distinct row:
+    rows equal bit for bit (stars of the same shape: a grid's interior, an icosphere's
+    symmetric vertices) share one evaluation, so the result is fn(N)'s exactly. Rows are
+    grouped by a random projection and each kept in its group only if it equals the
+    group's first row, so a key collision costs an evaluation, never a wrong result."""
+    K = len(N)
+    if K < 2:
+        return fn(N)
+    flat = N.reshape(K, -1)
+    _, first, inv = np.unique(flat @ _probe(flat.shape[1]), return_index=True, return_inverse=True)
+    rep = first[inv.ravel()]
+    rep = np.where(np.all(flat == flat[rep], axis=1), rep, np.arange(K))
+    distinct, back = np.unique(rep, return_inverse=True)
+    if len(distinct) == K:
+        return fn(N)
+    return fn(N[distinct])[back.ravel()]
+
 
 def pinned_normal_inverse(N: np.ndarray, degree: int) -> np.ndarray:
     """Truncated pseudo-inverses (K, M, M) of normal matrices N (K, M, M) of scaled-monomial
-    fits, in the bending metric: c = P @ (B^T W t) is the smoothest minimiser."""
+    fits, in the bending metric: c = P @ (B^T W t) is the smoothest minimiser. Equal
+    matrices are factored once (:func:`shared_rows`)."""
+    return shared_rows(np.asarray(N, dtype=np.float64),
+                       lambda Nd: _pinned_normal_inverse(Nd, degree))
+
+
+def _pinned_normal_inverse(N: np.ndarray, degree: int) -> np.ndarray:
     G = bending_gram(degree)
     L = np.linalg.cholesky(G)
     Li = np.linalg.inv(L)                       # G = L L^T; coordinates z = L^T c
@@ -99,50 +136,171 @@ def candidate_fits_all(rings, rules) -> list:
     n2 = np.bincount(owner[rings.ring <= 2], minlength=V)
     wider = 3 if np.any(rings.ring == 3) else 2
     out = []
-    acc = [{"normal": np.zeros((V, n_monomials(d), n_monomials(d))), "rows": [], "cols": [],
-            "vals": [], "hvals": []} for d, _ in rules]
-    # batches of equal padded length (powers of two): little padding for high valences
+    acc = [{"normal": np.zeros((V, n_monomials(d), n_monomials(d))), "blocks": []}
+           for d, _ in rules]
+    # batches of equal padded length (powers of two): little padding for high valences;
+    # in chunks of vertices whose working set stays in cache (measured: whole batches made
+    # the time per vertex grow 1.4x from a 64x64 to a 128x128 grid)
     pad = 2 ** np.ceil(np.log2(np.maximum(cnt, 1))).astype(np.int64)
     for n in np.unique(pad).tolist():
-        vs = np.flatnonzero(pad == n)
-        k = np.arange(n)[None, :]
-        idx = rings.offsets[vs][:, None] + np.minimum(k, cnt[vs][:, None] - 1)
-        real = k < cnt[vs][:, None]
-        ring = rings.ring[idx]
-        y = rings.y[idx] / rings.h[vs][:, None, None]
-        Ball = monomials(y, dmax)[0]                          # (K, n, M_max)
-        q = rings.ids[idx]
-        for (degree, layers), a in zip(rules, acc):
-            M = n_monomials(degree)
-            B = Ball[..., :M]
-            use_layers = np.full(len(vs), layers)
-            if layers < 2:
-                N1 = _normal(B, _data_weights(y, real & (ring <= 1)))
-                lam = np.linalg.eigvalsh(N1)
-                cond = lam[:, -1] / np.maximum(lam[:, 0], 1e-300)
-                use_layers = np.where((n1[vs] < M + 2) | (cond > MAX_CONDITION), 2, use_layers)
-            use_layers = np.where((use_layers == 2) & (n2[vs] < M + 2), wider, use_layers)
-            use = real & (ring <= use_layers[:, None])
-            w = _data_weights(y, use)
-            w /= np.maximum(w.sum(1, keepdims=True), 1e-300)  # per vertex: weights sum to 1
-            bw = np.swapaxes(B * w[..., None], 1, 2)          # (K, M, n)
-            N = bw @ B
-            a["normal"][vs] = N
-            Pinv = pinned_normal_inverse(N, degree)
-            deg_of = monomial_exponents(degree).sum(1)
-            A = (Pinv @ bw) / rings.h[vs][:, None, None] ** deg_of[None, :, None]  # unscaled
-            kk, nn = np.nonzero(use)
-            r = vs[:, None] * M + np.arange(M)[None, :]         # (K, M) rows
-            # data entries (one per used datum and monomial), then the pins - sum_j A_j X_v
-            a["rows"] += [r[kk].ravel(), r.ravel()]
-            a["cols"] += [np.repeat(q[kk, nn], M), np.repeat(vs, M)]
-            a["vals"] += [A[kk, :, nn].ravel(), -(A * use[:, None, :]).sum(2).ravel()]
-            # right-hand sides B^T W (X_q - X_v) of the scaled normal equations
-            a["hvals"] += [bw[kk, :, nn].ravel(), -bw.sum(2).ravel()]
+        batch = np.flatnonzero(pad == n)
+        step = max(1, CHUNK_DATA // n)
+        for c0 in range(0, len(batch), step):
+            _fit_chunk(rings, rules, acc, batch[c0:c0 + step], n, cnt, n1, n2, wider, dmax)
     for (degree, _), a in zip(rules, acc):
-        shape = (V * n_monomials(degree), V)
-        rows, cols = np.concatenate(a["rows"]), np.concatenate(a["cols"])
-        matrix = sp.csr_matrix((np.concatenate(a["vals"]), (rows, cols)), shape=shape)
-        rhs = sp.csr_matrix((np.concatenate(a["hvals"]), (rows, cols)), shape=shape)
+        matrix, rhs = _block_rows(a["blocks"], V, n_monomials(degree))
         out.append(CandidateFits(degree, matrix, a["normal"], rhs))
     return out
+
+
+def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
+    """The fits of the vertices vs (K,), padded to n data, for every rule: normal matrices
+    into acc[rule]["normal"], operator blocks appended to acc[rule]["blocks"]."""
+    k = np.arange(n)[None, :]
+    idx = rings.offsets[vs][:, None] + np.minimum(k, cnt[vs][:, None] - 1)
+    real = k < cnt[vs][:, None]
+    ring = rings.ring[idx]
+    y = rings.y[idx] / rings.h[vs][:, None, None]
+    Ball = monomials(y, dmax)[0]                          # (K, n, M_max)
+    q = rings.ids[idx]
+    for (degree, layers), a in zip(rules, acc):
+        M = n_monomials(degree)
+        B = Ball[..., :M]
+        use_layers = np.full(len(vs), layers)
+        if layers < 2:
+            N1 = _normal(B, _data_weights(y, real & (ring <= 1)))
+            lam = shared_rows(N1, np.linalg.eigvalsh)
+            cond = lam[:, -1] / np.maximum(lam[:, 0], 1e-300)
+            use_layers = np.where((n1[vs] < M + 2) | (cond > MAX_CONDITION), 2, use_layers)
+        use_layers = np.where((use_layers == 2) & (n2[vs] < M + 2), wider, use_layers)
+        use = real & (ring <= use_layers[:, None])
+        w = _data_weights(y, use)
+        w /= np.maximum(w.sum(1, keepdims=True), 1e-300)  # per vertex: weights sum to 1
+        bw = np.swapaxes(B * w[..., None], 1, 2)          # (K, M, n)
+        N = bw @ B
+        a["normal"][vs] = N
+        Pinv = pinned_normal_inverse(N, degree)
+        deg_of = monomial_exponents(degree).sum(1)
+        A = (Pinv @ bw) / rings.h[vs][:, None, None] ** deg_of[None, :, None]  # unscaled
+        a["blocks"].append(_compact(vs, use, q, A, bw))   # A, bw: zero off the used data
+
+
+def _compact(vs, use, q, A, bw):
+    """One chunk's csr rows: vertex k's rows hold the used data ids q (K, n) and the pin
+    (column v, minus the row's sum) with the operator values A and the right-hand-side
+    values bw (K, M, n; zero off the used data). Compact form (vs, cols (K, r), nr (K,),
+    vals (K, M, r), hvals (K, M, r)) -- the nr[k] columns by increasing column, one sort
+    per vertex (all rows of a vertex share its columns) -- when no vertex is reached by
+    several unfoldings (grids, flat meshes); else coordinates (rows, cols, vals, hvals),
+    data then pins, for scipy to sort and sum (``rows`` an int array marks this form)."""
+    V = np.iinfo(np.int64).max
+    cols = np.concatenate([np.where(use, q, V), vs[:, None]], axis=1)  # unused: last
+    order = np.argsort(cols, axis=1, kind="stable")
+    cols = np.take_along_axis(cols, order, axis=1)
+    if np.any((cols[:, 1:] == cols[:, :-1]) & (cols[:, 1:] < V)):
+        K, M, _ = A.shape
+        kk, nn = np.nonzero(use)
+        r = vs[:, None] * M + np.arange(M)
+        return (np.concatenate([r[kk].ravel(), r.ravel()]),
+                np.concatenate([np.repeat(q[kk, nn], M), np.repeat(vs, M)]),
+                np.concatenate([A[kk, :, nn].ravel(), -A.sum(2).ravel()]),
+                np.concatenate([bw[kk, :, nn].ravel(), -bw.sum(2).ravel()]))
+    nr = (cols < V).sum(1)
+    r = int(nr.max())
+    X = np.concatenate([A, bw], axis=1)                 # A and bw with their pins, stacked
+    X = np.concatenate([X, np.concatenate([-A.sum(2), -bw.sum(2)], axis=1)[..., None]], axis=2)
+    X = np.take_along_axis(X, order[:, None, :r], axis=2)
+    M = A.shape[1]
+    return vs, cols[:, :r], nr, X[:, :M], X[:, M:]
+
+
+def _block_rows(blocks, V, M):
+    """The operator and right-hand-side csr matrices (V M, V), canonical, from the chunks'
+    rows (:func:`_compact`): all compact -- the rows' lengths known -- written straight
+    into the csr arrays; else every chunk as coordinates, sorted and summed by scipy."""
+    shape = (V * M, V)
+    if any(len(b) == 4 for b in blocks):
+        parts = [b if len(b) == 4 else _coordinates(*b, M) for b in blocks]
+        rows, cols = (np.concatenate([p[i] for p in parts]) for i in (0, 1))
+        return tuple(sp.csr_matrix((np.concatenate([p[i] for p in parts]), (rows, cols)),
+                                   shape=shape) for i in (2, 3))
+    nrow = np.zeros(V, dtype=np.int64)
+    for vs, _, nr, _, _ in blocks:
+        nrow[vs] = nr
+    indptr = np.zeros(V * M + 1, dtype=np.int64)
+    np.cumsum(np.repeat(nrow, M), out=indptr[1:])
+    nnz = int(indptr[-1])
+    indices = np.empty(nnz, dtype=np.int32 if V < 2 ** 31 - 1 else np.int64)
+    out = [np.empty(nnz), np.empty(nnz)]
+    for vs, cols, nr, vals, hvals in blocks:
+        pos, ok = _slots(indptr, vs, nr, cols.shape[1], M)
+        full = bool(ok.all())
+        where = pos.ravel() if full else pos[ok]
+        c = np.broadcast_to(cols[:, None, :], pos.shape)
+        indices[where] = c.ravel() if full else c[ok]
+        for o, X in zip(out, (vals, hvals)):
+            o[where] = X.ravel() if full else X[ok]
+    return (sp.csr_matrix((out[0], indices, indptr), shape=shape),
+            sp.csr_matrix((out[1], indices.copy(), indptr.copy()), shape=shape))
+
+
+def _slots(indptr, vs, nr, r, M):
+    """(pos (K, M, r), ok (K, M, r)): csr positions of the compact entries, and which are
+    real (slot < nr)."""
+    pos = indptr[:-1][vs[:, None] * M + np.arange(M)][:, :, None] + np.arange(r)
+    ok = np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], pos.shape)
+    return pos, ok
+
+
+def _coordinates(vs, cols, nr, vals, hvals, M):
+    """A compact chunk (:func:`_compact`) as coordinates (rows, cols, vals, hvals)."""
+    r = cols.shape[1]
+    rows = np.broadcast_to((vs[:, None] * M + np.arange(M))[:, :, None], vals.shape)
+    ok = np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], vals.shape)
+    return rows[ok], np.broadcast_to(cols[:, None, :], vals.shape)[ok], vals[ok], hvals[ok]
+
+
+def _ranges(starts, counts):
+    """Concatenated aranges [starts[i], starts[i] + counts[i])."""
+    total = int(counts.sum())
+    first = np.cumsum(counts) - counts
+    return np.repeat(starts - first, counts) + np.arange(total)
+
+
+def _canonical(A):
+    """A as canonical csr (sorted, duplicates summed; a product's rows may come unsorted),
+    the caller's matrix untouched."""
+    A = A.tocsr()
+    if not A.has_canonical_format:
+        A = A.copy()
+        A.sum_duplicates()
+    return A
+
+
+def chosen_rows(cands, choice, part, V, mmax):
+    """csr (V mmax, V): rows v mmax + m (m < M) are row v M + m of the ``part`` ("matrix"
+    or "rhs") of vertex v's chosen candidate cands[choice[v]] (the padded layout of the
+    coefficients, :mod:`gerbs_core.mesh.agreement`), the others empty. The candidates'
+    canonical rows are copied as they are, straight into the output arrays (the same
+    entries in the same order as a coordinate-format selection would give)."""
+    mats = [_canonical(getattr(c, part)) for c in cands]
+    m = np.tile(np.arange(mmax), V)
+    v = np.repeat(np.arange(V), mmax)
+    pick = np.repeat(choice, mmax)
+    lens = np.zeros(V * mmax, dtype=np.int64)
+    src = []
+    for i, (A, c) in enumerate(zip(mats, cands)):
+        M = n_monomials(c.degree)
+        rows = np.flatnonzero((pick == i) & (m < M))
+        r = v[rows] * M + m[rows]
+        lens[rows] = A.indptr[r + 1] - A.indptr[r]
+        src.append((rows, r))
+    indptr = np.zeros(V * mmax + 1, dtype=np.int64)
+    np.cumsum(lens, out=indptr[1:])
+    data = np.empty(indptr[-1])
+    indices = np.empty(indptr[-1], dtype=mats[0].indices.dtype)
+    for A, (rows, r) in zip(mats, src):
+        cnt = lens[rows]
+        to, fr = _ranges(indptr[rows], cnt), _ranges(A.indptr[r], cnt)
+        data[to], indices[to] = A.data[fr], A.indices[fr]
+    return sp.csr_matrix((data, indices, indptr), shape=(V * mmax, V))

@@ -66,19 +66,28 @@ def map_to_polygon(lat, corners2d, centers=None, local: bool = False) -> np.ndar
     fo, n = tp.face_offsets[face], tp.face_sizes[face]
     a, b = uv[:, :1], uv[:, 1:]
     out = np.empty((len(face), X.shape[1]))
-    s = n == 3
-    c = fo[s]
-    out[s] = (1 - a[s] - b[s]) * X[c] + a[s] * X[c + 1] + b[s] * X[c + 2]
-    s = n == 4
-    c = fo[s]
-    out[s] = ((1 - a[s]) * (1 - b[s]) * X[c] + a[s] * (1 - b[s]) * X[c + 1]
-              + a[s] * b[s] * X[c + 2] + (1 - a[s]) * b[s] * X[c + 3])
-    s = n >= 5
-    if s.any():
-        if ctr is None:
-            ctr = _fan_centres(tp, X, None)
-        k = fan[s]
-        c0 = fo[s] + k
-        c1 = fo[s] + (k + 1) % n[s]
-        out[s] = (1 - a[s] - b[s]) * ctr[face[s]] + a[s] * X[c0] + b[s] * X[c1]
+    for size, s in _by_size(n):
+        aa, bb, c = a[s], b[s], fo[s]
+        if size == 3:
+            out[s] = (1 - aa - bb) * X[c] + aa * X[c + 1] + bb * X[c + 2]
+        elif size == 4:
+            out[s] = ((1 - aa) * (1 - bb) * X[c] + aa * (1 - bb) * X[c + 1]
+                      + aa * bb * X[c + 2] + (1 - aa) * bb * X[c + 3])
+        else:
+            if ctr is None:
+                ctr = _fan_centres(tp, X, None)
+            k = fan[s]
+            c0 = c + k
+            c1 = c + (k + 1) % n[s]
+            out[s] = (1 - aa - bb) * ctr[face[s]] + aa * X[c0] + bb * X[c1]
     return out
+
+
+def _by_size(n):
+    """(size, selector) of the samples by face size n (P,): 3, 4 and >= 5 (the fans, one
+    group); the selector a full slice when every sample has it (no masked copies)."""
+    groups = [(3, n == 3), (4, n == 4), (5, n >= 5)]
+    for size, s in groups:
+        if s.all():
+            return [(size, slice(None))]
+    return [(size, s) for size, s in groups if s.any()]

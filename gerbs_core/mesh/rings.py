@@ -151,12 +151,11 @@ def data_rings(topo, charts, corners2d, layers: int = 2, min_data: int = 7) -> D
     for ring in range(2, 4):
         if ring > layers and ring == 2:
             break
-        c, face, z = _unfold_next(topo, corners2d, c, face, z, placed)
-        if ring == 3:   # only where rings 1-2 hold too few data
+        if ring == 3:   # only where rings 1-2 hold too few data: unfold only their faces
             have = np.bincount(np.concatenate([p[0] for p in parts]), minlength=V)
-            need = np.flatnonzero(have < min_data)
-            sel = np.isin(charts.corner_vertex[c], need)
+            sel = have[charts.corner_vertex[c]] < min_data
             c, face, z = c[sel], face[sel], z[sel]
+        c, face, z = _unfold_next(topo, corners2d, c, face, z, placed)
         if not len(c):
             break
         placed = np.concatenate([placed, charts.corner_vertex[c] * F + face])
