@@ -130,3 +130,22 @@ def test_fold_penalty_leaves_smooth_meshes_alone():
     a = BlendingSurface(V, F).tessellate(4)[0]
     b = BlendingSurface(V, F, fairness=FairnessRule(fold=0.0)).tessellate(4)[0]
     assert np.array_equal(a, b)
+
+
+def test_choice_ties_are_decided_by_order_not_round_off():
+    """first_minimum: energies within TIE (relative) of the least are ties, taken by the
+    lower candidate, so a change of summation order (round-off ~1e-16) cannot flip a
+    degree; a real gap and an unchoosable (infinite) candidate are respected."""
+    from gerbs_core.mesh.agreement import TIE, first_minimum
+    rng = np.random.default_rng(5)
+    E = rng.uniform(1.0, 2.0, (200, 4))
+    E[:100, 2] = E[:100, 1] = E[:100].min(1)             # exact ties in columns 1, 2
+    noisy = E * (1 + 1e-14 * rng.standard_normal(E.shape))  # round-off of the sums
+    assert np.array_equal(first_minimum(noisy), first_minimum(E))
+    assert np.array_equal(first_minimum(E)[:100], np.where(E[:100, 0] <= E[:100, 1], 0, 1))
+    assert np.array_equal(first_minimum(E)[100:], np.argmin(E[100:], axis=1))
+    # plain argmin is not robust to the same noise: the test would catch a revert
+    assert not np.array_equal(np.argmin(noisy, axis=1), np.argmin(E, axis=1))
+    gap = np.array([[1.0, 1.0 - 10 * TIE, np.inf]])          # a real (if small) gap wins
+    assert first_minimum(gap)[0] == 1
+    assert first_minimum(np.array([[np.inf, 3.0, 3.0]]))[0] == 1
