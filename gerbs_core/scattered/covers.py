@@ -85,7 +85,7 @@ def _set_transforms(tri, points):
     triangle: 0.2 s for 10^5 points, a fifth of a CloughTocher2DInterpolator fit.
     Same layout and rule: rows 0-1 the inverse of T = [p0 - p2, p1 - p2] (columns),
     row 2 the vertex p2; NaN where the 1-norm reciprocal condition number of T is
-    below eps (degenerate triangles). Differs from LAPACK's only in rounding."""
+    below 1000 eps (degenerate triangles, scipy's limit). Differs from LAPACK's only in rounding."""
     s = tri.simplices
     r = points[s[:, 2]]
     d0, d1 = points[s[:, 0]] - r, points[s[:, 1]] - r            # T = [[a, b], [c, d]]
@@ -100,7 +100,9 @@ def _set_transforms(tri, points):
         norm_t = np.maximum(np.abs(a) + np.abs(c), np.abs(b) + np.abs(d))
         A = np.abs(out[:, :2])
         norm_i = np.maximum(A[:, 0, 0] + A[:, 1, 0], A[:, 0, 1] + A[:, 1, 1])
-        bad = ~(1.0 / (norm_t * norm_i) >= np.finfo(float).eps)
+        # scipy's rule (_get_barycentric_transforms: rcond_limit = 1000 eps): a sliver
+        # stored finite would stop find_simplex's walk where scipy's widens its search
+        bad = ~(1.0 / (norm_t * norm_i) >= 1000 * np.finfo(float).eps)
     out[:, 2] = r
     out[bad] = np.nan
     # scipy's cache of the property ``transform`` (a private attribute, None until the

@@ -255,3 +255,11 @@ def test_vectorized_barycentric_transforms_match_scipy():
     pts = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [0.0, 1.0]])
     _set_transforms(Flat, pts)
     assert np.isnan(Flat._transform[0]).all() and np.isfinite(Flat._transform[1]).all()
+    # slivers: NaN exactly where scipy's own builder says so (its limit is 1000 eps)
+    from scipy.spatial import _qhull
+    for h in (1e-10, 1e-12, 1e-13, 1e-14, 1e-15, 1e-16):
+        pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, h], [0.0, 1.0]])
+        Flat._transform = None
+        _set_transforms(Flat, pts)
+        ref = _qhull._get_barycentric_transforms(pts, Flat.simplices.astype(np.intc), np.finfo(float).eps)
+        assert np.array_equal(np.isnan(Flat._transform[:, 0, 0]), np.isnan(ref[:, 0, 0])), h
