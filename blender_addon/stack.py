@@ -77,10 +77,21 @@ def _read_final(final, groups, normals, known, record):
         reads["positions"] += 1
         return kept
     reads["full"] += 1
-    sizes = mesh_io.read_face_ints(final, ids.CHANNEL_FACE_SIZE)  # (none while it names a record)
+    # the channel's face sizes only where the group stored them in this evaluation
+    # (serial -1): while it names a record it passes the mesh's own attributes on, and a
+    # mesh may carry a stale copy of that attribute (an old Apply)
+    sizes = mesh_io.read_face_ints(final, ids.CHANNEL_FACE_SIZE) if _stored_sizes(final) else None
     inp = mesh_io.read_mesh(final, normals, positions, sizes)
     channel = _group_channel(known, groups)
     return inp.with_carried(attributes.read_carried(final, groups, channel))
+
+
+def _stored_sizes(final) -> bool:
+    """Whether the node group stored the face sizes in this evaluation (its record
+    serial is -1: it named no record)."""
+    attr = final.attributes.get(f"{ids.CHANNEL_RECORD}0")
+    return (attr is not None and attr.domain == "POINT" and attr.data_type == "INT"
+            and len(attr.data) > 0 and attr.data[0].value == -1)
 
 
 def _kept(final, groups, normals, positions, record):

@@ -213,3 +213,35 @@ def test_edits_other_than_positions_are_read_in_full(blender, monkeypatch):
     assert _statuses().get("updated", 0) == statuses.get("updated", 0) + 1
     assert _statuses().get("rebuilt", 0) == rebuilt + 1
     bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_a_stale_face_size_channel_in_the_mesh_is_never_taken_for_the_faces(blender):
+    """A mesh that carries the channel's face-size attribute from an old Apply (here:
+    wrong sizes with the right total) while the node group passes it on untouched (the
+    group found the topology the record's): the sync, reading in full because a new
+    layer appeared, takes the faces from the mesh, not from that stale attribute."""
+    from blender_addon import geometry_nodes as gn
+    from blender_addon import ids
+
+    obj, mod, bm, X, P0 = _edit()
+    bpy.ops.object.mode_set(mode="OBJECT")
+    stale = np.full(len(obj.data.polygons), 3, dtype=np.int32)
+    stale[0], stale[1] = 2, 4                    # same corner count, other faces
+    obj.data.attributes.new(ids.CHANNEL_FACE_SIZE, "INT", "FACE").data.foreach_set("value", stale)
+    bpy.ops.object.mode_set(mode="EDIT")
+    bm = bmesh.from_edit_mesh(obj.data)
+    bm.verts.ensure_lookup_table()
+    bm.verts[3].co.z += 0.05
+    _update(obj)                                 # the record now names this topology
+    before = _reads()
+    bm.verts.layers.float.new("new_layer")       # a layer the record lacks: read in full
+    bm.verts[3].co.z += 0.05
+    _update(obj)
+    assert _more(before, _reads()) == {"full": 1, "positions": 0}
+    assert not gn.get_error(mod)
+    P = _update(obj)          # the next evaluation (nothing changed) shows the surface
+    X_new, faces = _bm_mesh(bm)
+    assert all(len(f) == 3 for f in faces)
+    fresh = _expected(obj, X, X_new.astype(np.float64))
+    assert np.abs(P - fresh).max() <= 1e-5
+    bpy.ops.object.mode_set(mode="OBJECT")
