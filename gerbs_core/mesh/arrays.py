@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["read_only"]
+__all__ = ["read_only", "ranges"]
 
 
 def read_only(a) -> np.ndarray:
@@ -12,3 +12,11 @@ def read_only(a) -> np.ndarray:
     a = np.ascontiguousarray(a)
     a.flags.writeable = False
     return a
+
+
+def ranges(starts, counts) -> np.ndarray:
+    """Concatenated aranges [starts[i], starts[i] + counts[i]) (int64): the positions of
+    ragged runs, e.g. every entry of the CSR rows ``starts = indptr[rows]``."""
+    counts = np.asarray(counts, dtype=np.int64)
+    first = np.cumsum(counts) - counts
+    return np.repeat(np.asarray(starts, dtype=np.int64) - first, counts) + np.arange(int(counts.sum()))

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidParameterError
+from .arrays import ranges
 from .agreement import MMAX, face_sharpness, fair_fits
 from .charts import vertex_charts
 from .cover import star_cover
@@ -100,7 +101,7 @@ def input_edge_weights(repair, faces, creases) -> np.ndarray:
     last = np.searchsorted(ecode[order], keys, side="right")
     # every repaired edge of every pair (an input edge split into sheets lands on several)
     n = last - first
-    idx = order[np.repeat(first, n) + (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n))]
+    idx = order[ranges(first, n)]
     np.maximum.at(out, idx, np.repeat(w, n))
     return out
 

@@ -23,6 +23,7 @@ from functools import lru_cache
 import numpy as np
 import scipy.sparse as sp
 
+from .arrays import ranges
 from .monomials import bending_gram, monomial_exponents, monomials, n_monomials
 
 __all__ = ["RCOND", "CANDIDATES", "pinned_normal_inverse", "candidate_fits",
@@ -260,13 +261,6 @@ def _coordinates(vs, cols, nr, vals, hvals, M):
     return rows[ok], np.broadcast_to(cols[:, None, :], vals.shape)[ok], vals[ok], hvals[ok]
 
 
-def _ranges(starts, counts):
-    """Concatenated aranges [starts[i], starts[i] + counts[i])."""
-    total = int(counts.sum())
-    first = np.cumsum(counts) - counts
-    return np.repeat(starts - first, counts) + np.arange(total)
-
-
 def _canonical(A):
     """A as canonical csr (sorted, duplicates summed; a product's rows may come unsorted),
     the caller's matrix untouched."""
@@ -301,6 +295,6 @@ def chosen_rows(cands, choice, part, V, mmax):
     indices = np.empty(indptr[-1], dtype=mats[0].indices.dtype)
     for A, (rows, r) in zip(mats, src):
         cnt = lens[rows]
-        to, fr = _ranges(indptr[rows], cnt), _ranges(A.indptr[r], cnt)
+        to, fr = ranges(indptr[rows], cnt), ranges(A.indptr[r], cnt)
         data[to], indices[to] = A.data[fr], A.indices[fr]
     return sp.csr_matrix((data, indices, indptr), shape=(V * mmax, V))

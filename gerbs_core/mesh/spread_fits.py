@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from .arrays import ranges
 from .fits import CandidateFits, pinned_normal_inverse
 from .monomials import monomial_exponents, monomials, n_monomials
 
@@ -57,8 +58,7 @@ def _ring_rows(rings, verts, layers, M):
     more where they hold fewer than M + 2 data (the rule of mesh.fits)."""
     cnt = np.diff(rings.offsets)[verts]
     owner = np.repeat(np.arange(len(verts)), cnt)
-    k = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-    idx = rings.offsets[verts][owner] + k
+    idx = ranges(rings.offsets[verts], cnt)
     n_in = np.bincount(owner[rings.ring[idx] <= layers], minlength=len(verts))
     use = rings.ring[idx] <= np.where(n_in < M + 2, layers + 1, layers)[owner]
     owner, idx = owner[use], idx[use]
@@ -89,7 +89,7 @@ def _cage_rows(topo, charts, corners2d, verts, h):
     f = topo.corner_face[cs]
     cnt = lo[f + 1] - lo[f]
     row_c = np.repeat(cs, cnt)
-    idx = np.repeat(lo[f], cnt) + np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    idx = ranges(lo[f], cnt)
     owner = slot[topo.face_vertices[row_c]]
     y = charts.to_chart(row_c, x[idx])[0] / h[verts][owner, None]
     keep = np.hypot(y[:, 0], y[:, 1]) > 1e-9
