@@ -72,7 +72,8 @@ def _read_final(final, groups, normals, known, record):
         return FRESH
     positions = np.empty((len(final.vertices), 3), dtype=np.float32)
     attr.data.foreach_get("vector", positions.ravel())
-    kept = _kept(final, groups, normals, positions, record)
+    named = _channel_serial(final)
+    kept = _kept(final, groups, normals, positions, record, named)
     if kept is not None:
         reads["positions"] += 1
         return kept
@@ -80,36 +81,37 @@ def _read_final(final, groups, normals, known, record):
     # the channel's face sizes only where the group stored them in this evaluation
     # (serial -1): while it names a record it passes the mesh's own attributes on, and a
     # mesh may carry a stale copy of that attribute (an old Apply)
-    sizes = mesh_io.read_face_ints(final, ids.CHANNEL_FACE_SIZE) if _stored_sizes(final) else None
+    stored = named is not None and named[0] == -1
+    sizes = mesh_io.read_face_ints(final, ids.CHANNEL_FACE_SIZE) if stored else None
     inp = mesh_io.read_mesh(final, normals, positions, sizes)
     channel = _group_channel(known, groups)
     return inp.with_carried(attributes.read_carried(final, groups, channel))
 
 
-def _stored_sizes(final) -> bool:
-    """Whether the node group stored the face sizes in this evaluation (its record
-    serial is -1: it named no record)."""
-    attr = final.attributes.get(f"{ids.CHANNEL_RECORD}0")
-    return (attr is not None and attr.domain == "POINT" and attr.data_type == "INT"
-            and len(attr.data) > 0 and attr.data[0].value == -1)
+def _channel_serial(final) -> tuple | None:
+    """The record serial the node group put into the channel (ids.CHANNEL_RECORD + k,
+    first point; -1s: it named no record and stored the face sizes), or None where the
+    channel has none."""
+    out = []
+    for k in range(len(ids.SERIAL_NAMES)):
+        attr = final.attributes.get(f"{ids.CHANNEL_RECORD}{k}")
+        if attr is None or attr.domain != "POINT" or attr.data_type != "INT" or not len(attr.data):
+            return None
+        out.append(attr.data[0].value)
+    return tuple(out)
 
 
-def _kept(final, groups, normals, positions, record):
+def _kept(final, groups, normals, positions, record, named):
     """`record`'s input with these positions (and normals), when the channel says the
     input's counts, topology, material indices, edges and recorded layers equal the
-    record of that stamp (the node group compared them, ids.CHANNEL_RECORD), and the
-    mesh has the same layers and active maps; else None (read everything).
-    `record`: (input, stamp) the viewport result's state wrote, or None."""
+    record of that stamp (`named`: the serial the node group, which compared them, put
+    into the channel), and the mesh has the same layers and active maps; else None
+    (read everything). `record`: (input, stamp) the viewport result's state wrote, or None."""
     if record is None or record[0] is None or record[0].carried is None:
         return None
     inp, want = record[0], snapshot.serial(record[1])
-    if want == (0, 0) or len(positions) != len(inp.positions):
+    if want == (0, 0) or len(positions) != len(inp.positions) or named != want:
         return None
-    for k, part in enumerate(want):
-        attr = final.attributes.get(f"{ids.CHANNEL_RECORD}{k}")
-        if (attr is None or attr.domain != "POINT" or attr.data_type != "INT"
-                or not len(attr.data) or attr.data[0].value != part):
-            return None
     carried = inp.carried
     if (attributes.layer_keys(final, groups) != carried.keys()
             or attributes.flags_of(final) != carried.flags()):
