@@ -49,8 +49,7 @@ from .cover import require_cover
 from .coupling import coupled_fits, identity_fits
 from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomials, n_monomials
-from .row_values import (candidate_coefs, candidate_values, chunks, per_degree,
-                         rows_apply as _rows_apply)  # noqa: F401 (the prototypes' name)
+from .row_values import candidate_coefs, candidate_values, chunks, per_degree
 from .spread_fits import SPREAD, gate, spread_candidates
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]

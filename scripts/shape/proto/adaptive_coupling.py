@@ -14,6 +14,7 @@ import gerbs_core.mesh.agreement as ag  # noqa: E402
 from gerbs_core.mesh.coupling import coupled_fits  # noqa: E402
 from gerbs_core.mesh.fits import candidate_fits_all  # noqa: E402
 from gerbs_core.mesh.monomials import monomials, n_monomials  # noqa: E402
+from gerbs_core.mesh.row_values import rows_apply  # noqa: E402
 
 OPTS = {"alpha": 0.3, "passes": 1, "c0": 0.3, "margin": 0.2}
 
@@ -22,7 +23,7 @@ def vertex_cos(coef, degrees, smp, fn, V):
     """(V,) least cos(normal of l_v, face normal) over the vertex's rows."""
     coef = np.asarray(coef).reshape(V * ag.MMAX, 3)
     dm = monomials(smp.y, ag.DMAX, 1)[1]
-    d = [ag._rows_apply(np.ascontiguousarray(dm[:, :, j]), smp.vertex, coef) for j in (0, 1)]
+    d = [rows_apply(np.ascontiguousarray(dm[:, :, j]), smp.vertex, coef) for j in (0, 1)]
     n = np.cross(d[0], d[1])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     cs = np.einsum("ij,ij->i", n, fn[smp.face])

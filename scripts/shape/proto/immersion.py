@@ -10,18 +10,19 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 from shape.patching import patching, run_variant  # noqa: E402
 import gerbs_core.mesh.agreement as ag  # noqa: E402
 from gerbs_core.mesh.monomials import monomials, n_monomials  # noqa: E402
+from gerbs_core.mesh.row_values import rows_apply  # noqa: E402
 
 OPTS = {"gamma": 1000.0, "q0": 0.3, "keep_normal": True}
 
 
-def penalty(cands, X, smp, fn, h, rule, _old=ag._fold_penalty):
-    out = _old(cands, X, smp, fn, h, rule) if OPTS["keep_normal"] else 0.0
+def penalty(cands, X, smp, fn, h, rule, coefs=None, _old=ag._fold_penalty):
+    out = _old(cands, X, smp, fn, h, rule, coefs) if OPTS["keep_normal"] else 0.0
     dm = monomials(smp.y, max(c.degree for c in cands), 1)[1]
     extra = np.zeros((len(smp.vertex), len(cands)))
     for i, c in enumerate(cands):
         M = n_monomials(c.degree)
         coef = (c.matrix @ X).reshape(-1, 3)
-        d1, d2 = (ag._rows_apply(np.ascontiguousarray(dm[:, :M, j]), smp.vertex, coef)
+        d1, d2 = (rows_apply(np.ascontiguousarray(dm[:, :M, j]), smp.vertex, coef)
                   for j in (0, 1))
         q = 2 * np.linalg.norm(np.cross(d1, d2), axis=1) / np.maximum(
             (d1 ** 2).sum(1) + (d2 ** 2).sum(1), 1e-300)

@@ -127,8 +127,8 @@ def candidates(rings, rules, _old=ag.candidate_fits_all):
     return base + extra
 
 
-def penalty(cands, X, smp, fn, h, rule, _old=ag._fold_penalty):
-    out = _old(cands, X, smp, fn, h, rule)
+def penalty(cands, X, smp, fn, h, rule, coefs=None, _old=ag._fold_penalty):
+    out = _old(cands, X, smp, fn, h, rule, coefs)
     k = OPTS["n_extra"]
     if k:
         off = ~OPTS["mask"][smp.vertex]
