@@ -12,6 +12,12 @@ every term's Psi mono_m for its degree's monomials, one term after another: both
 factors are written in contiguous slices of their final arrays, chunk by chunk of
 samples, with no scatter, no coordinate-format copy and no index sort. Values
 float64, indices int32 while they fit.
+
+Faces equal in every bit of their rows' inputs (:mod:`.face_classes`: a regular grid's
+faces) have equal rows at equal template points: where the classes' template points are
+at most ``SHARED_FRACTION`` of the samples, each class is evaluated once, at the points
+of its representative face, and the rows are copied to the samples (bit for bit the
+values of evaluating every sample; the columns come from each face's own vertices).
 """
 from __future__ import annotations
 
@@ -19,11 +25,19 @@ import numpy as np
 import scipy.sparse as sp
 
 from .agreement import MMAX
+from .arrays import ranges
+from .face_classes import face_classes
+from .lattice_templates import INTERIOR, template
 from .monomials import monomial_exponents, n_monomials, powers
+from .polygon_map import map_points
 
-__all__ = ["assemble", "CHUNK_SAMPLES"]
+__all__ = ["assemble", "CHUNK_SAMPLES", "SHARED_FRACTION"]
 
 CHUNK_SAMPLES = 16_384   # samples per chunk (~65k terms on quads: the working set in cache)
+# evaluate face classes once when their template points are at most this share of the
+# samples (every template point of a representative is evaluated, shared ones included)
+SHARED_FRACTION = 0.5
+LONG_RUN = 16            # rows copied as one slice (shorter runs: one gather for all)
 
 
 def _row_layout(topo, degrees, face):
@@ -78,7 +92,7 @@ def _partition(psi, terms, n_samples, n_max):
 def _write_mono(data_e, cols_e, e0, y, w, vertex, Mt):
     """E's entries of the terms (their values Psi mono_m and columns u M + m), term after
     term from e0: strided views of the output when all terms share one degree, else
-    one scatter per degree and monomial."""
+    one scatter per degree and monomial. ``cols_e`` None: values only."""
     T = len(w)
     ptr = np.zeros(T + 1, dtype=np.int64)
     np.cumsum(Mt, out=ptr[1:])
@@ -94,52 +108,136 @@ def _write_mono(data_e, cols_e, e0, y, w, vertex, Mt):
         val = np.empty(len(ww))
         if sel is None:
             dv = data_e[e0:e0 + T * M].reshape(T, M)
-            dc = cols_e[e0:e0 + T * M].reshape(T, M)
+            dc = None if cols_e is None else cols_e[e0:e0 + T * M].reshape(T, M)
         else:
             start = e0 + ptr[sel]
         for m, (a, b) in enumerate(E):
             np.multiply(p1[a], p2[b], out=val)
             if sel is None:
                 np.multiply(val, ww, out=dv[:, m])
-                np.add(cv, m, out=dc[:, m])
+                if dc is not None:
+                    np.add(cv, m, out=dc[:, m])
             else:
                 data_e[start + m] = val * ww
-                cols_e[start + m] = cv + m
+                if cols_e is not None:
+                    cols_e[start + m] = cv + m
 
 
 def _degree_of(M):
     return {n_monomials(d): d for d in range(1, 8)}[M]
 
 
+def _evaluate_rows(model, face, x, ptr_b, ptr_e, by_vertex, out_b, out_e):
+    """Write the rows of the samples (face (N,), x (N, 2) in their faces) into
+    ``out_b`` = (data, cols or None) and ``out_e`` likewise at the row pointers ptr_b,
+    ptr_e (N + 1,); returns max_k psi_k per sample (N,)."""
+    topo, ch, cover = model.topology, model.charts, model.cover
+    Mv = n_monomials(np.asarray(model.degrees))
+    n_max = int(topo.face_sizes.max())
+    N = len(face)
+    mx = np.empty(N)
+    for p0 in range(0, N, CHUNK_SAMPLES):
+        p1 = min(N, p0 + CHUNK_SAMPLES)
+        terms = _Terms(topo, by_vertex, face, ptr_b, p0, p1)
+        xt = x[p0:p1][terms.sample]
+        psi, pol = cover.psi_jet(ch, terms.corner, xt, 0)
+        w, mx[p0:p1] = _partition(psi[0], terms, p1 - p0, n_max)
+        t0, t1 = ptr_b[p0], ptr_b[p1]
+        out_b[0][t0:t1] = w
+        if out_b[1] is not None:
+            out_b[1][t0:t1] = terms.vertex
+        y = ch.to_chart(terms.corner, xt, 0, pol=pol)[0]
+        _write_mono(out_e[0], out_e[1], ptr_e[p0], y, w, terms.vertex, Mv[terms.vertex])
+    return mx
+
+
+def _gather_rows(src, src_ptr, rows, dst_ptr, step):
+    """The rows ``rows`` (N,) of the ragged array (src, src_ptr) one after another (their
+    lengths np.diff(dst_ptr)). Runs of rows that step by ``step`` (1: the next row, 0:
+    the same row) are copied as slices, the short ones gathered together."""
+    out = np.empty(dst_ptr[-1], dtype=src.dtype)
+    cut = np.flatnonzero(np.diff(rows) != step) + 1
+    first = np.concatenate([[0], cut])
+    length = np.diff(np.concatenate([first, [len(rows)]]))
+    short = np.ones(len(rows), dtype=bool)
+    for a, n in zip(first[length >= LONG_RUN].tolist(), length[length >= LONG_RUN].tolist()):
+        r0 = rows[a]
+        if step:
+            out[dst_ptr[a]:dst_ptr[a + n]] = src[src_ptr[r0]:src_ptr[r0 + n]]
+        else:
+            row = src[src_ptr[r0]:src_ptr[r0 + 1]]
+            out[dst_ptr[a]:dst_ptr[a + n]].reshape(n, len(row))[:] = row
+        short[a:a + n] = False
+    s = np.flatnonzero(short)
+    lens = dst_ptr[s + 1] - dst_ptr[s]
+    out[ranges(dst_ptr[s], lens)] = src[ranges(src_ptr[rows[s]], lens)]
+    return out
+
+
+def _shared(model, lattice, classes, by_vertex, ptr_b, ptr_e, ib, ie):
+    """(data_b, cols_b, data_e, cols_e, eps) with every face class
+    (:mod:`.face_classes`) evaluated once, at the template points of its representative
+    face, and the rows copied to the samples of all its faces."""
+    topo, deg = model.topology, np.asarray(model.degrees)
+    r = lattice.resolution
+    face, uv, fan, src = [], [], [], np.empty(lattice.n_points, dtype=np.int64)
+    off = 0
+    for (fk, G, own, n), cls, rep in zip(lattice.size_classes, classes.cls, classes.rep):
+        tuv, tfan, kind, loc = template(n, r)[:4]
+        # the interior points first, in their samples' order: a face's interior samples
+        # are then one run of rows of its class (copied as one slice)
+        order = np.lexsort((loc, kind != INTERIOR))
+        at = np.empty(len(order), dtype=np.int64)
+        at[order] = np.arange(len(order))
+        npt = len(tfan)
+        face.append(np.repeat(rep, npt))
+        uv.append(np.tile(tuv[order], (len(rep), 1)))
+        fan.append(np.tile(tfan[order], len(rep)))
+        ii, jj = np.nonzero(own)
+        src[G[ii, jj]] = off + cls[ii] * npt + at[jj]
+        off += len(rep) * npt
+    face, uv, fan = np.concatenate(face), np.concatenate(uv), np.concatenate(fan)
+    x = map_points(topo, np.asarray(model.layouts.corners, dtype=np.float64), face, fan, uv)
+    qb, qe = _row_layout(topo, deg, face)
+    tab_b, tab_e = np.empty(qb[-1]), np.empty(qe[-1])
+    mx = _evaluate_rows(model, face, x, qb, qe, by_vertex, (tab_b, None), (tab_e, None))
+    sface = lattice.face
+    sorted_vertex = topo.face_vertices[by_vertex].astype(ib)
+    Mc = n_monomials(deg[topo.face_vertices[by_vertex]])
+    pattern = ranges(topo.face_vertices[by_vertex] * MMAX, Mc).astype(ie)
+    pptr = np.zeros(topo.n_faces + 1, dtype=np.int64)
+    np.cumsum(np.add.reduceat(Mc, topo.face_offsets[:-1]), out=pptr[1:])
+    return (_gather_rows(tab_b, qb, src, ptr_b, 1),
+            _gather_rows(sorted_vertex, topo.face_offsets, sface, ptr_b, 0),
+            _gather_rows(tab_e, qe, src, ptr_e, 1),
+            _gather_rows(pattern, pptr, sface, ptr_e, 0), float(mx[src].min()))
+
+
 def assemble(model, lattice):
     """(B csr (P, V), E csr (P, V MMAX), eps) on ``lattice``; eps = min max_v psi_v.
 
-    Rows are in sample order with sorted column indices (canonical csr)."""
+    Rows are in sample order with sorted column indices (canonical csr). Faces of one
+    class (:mod:`.face_classes`) are evaluated once where the classes hold at most
+    ``SHARED_FRACTION`` of the samples' work."""
     topo, deg = model.topology, np.asarray(model.degrees)
-    ch, cover = model.charts, model.cover
-    x = lattice.map_to_polygon(model.layouts.corners)
     face = lattice.face
     P, V = lattice.n_points, topo.n_vertices
     ptr_b, ptr_e = _row_layout(topo, deg, face)
     ib, ie = _index_type(ptr_b[-1], V), _index_type(ptr_e[-1], V * MMAX)
-    data_b, cols_b = np.empty(ptr_b[-1]), np.empty(ptr_b[-1], dtype=ib)
-    data_e, cols_e = np.empty(ptr_e[-1]), np.empty(ptr_e[-1], dtype=ie)
     by_vertex = _sorted_corners(topo)
-    Mv = n_monomials(deg)
-    n_max = int(topo.face_sizes.max())
-    eps = np.inf
-    for p0 in range(0, P, CHUNK_SAMPLES):
-        p1 = min(P, p0 + CHUNK_SAMPLES)
-        terms = _Terms(topo, by_vertex, face, ptr_b, p0, p1)
-        xt = x[p0:p1][terms.sample]
-        psi, pol = cover.psi_jet(ch, terms.corner, xt, 0)
-        w, mx = _partition(psi[0], terms, p1 - p0, n_max)
-        eps = min(eps, float(mx.min()))
-        t0, t1 = ptr_b[p0], ptr_b[p1]
-        data_b[t0:t1] = w
-        cols_b[t0:t1] = terms.vertex
-        y = ch.to_chart(terms.corner, xt, 0, pol=pol)[0]
-        _write_mono(data_e, cols_e, ptr_e[p0], y, w, terms.vertex, Mv[terms.vertex])
+    classes = face_classes(model, lattice, by_vertex)
+    work = sum(len(rep) * G.shape[1] for rep, (_, G, _, _) in zip(classes.rep,
+                                                                  lattice.size_classes))
+    if work <= SHARED_FRACTION * P:
+        data_b, cols_b, data_e, cols_e, eps = _shared(model, lattice, classes, by_vertex,
+                                                      ptr_b, ptr_e, ib, ie)
+    else:
+        x = lattice.map_to_polygon(model.layouts.corners)
+        data_b, cols_b = np.empty(ptr_b[-1]), np.empty(ptr_b[-1], dtype=ib)
+        data_e, cols_e = np.empty(ptr_e[-1]), np.empty(ptr_e[-1], dtype=ie)
+        mx = _evaluate_rows(model, face, x, ptr_b, ptr_e, by_vertex, (data_b, cols_b),
+                            (data_e, cols_e))
+        eps = float(mx.min()) if P else np.inf
     B = sp.csr_matrix((data_b, cols_b, ptr_b.astype(ib)), shape=(P, V))
     E = sp.csr_matrix((data_e, cols_e, ptr_e.astype(ie)), shape=(P, V * MMAX))
     B.has_canonical_format = E.has_canonical_format = True

@@ -63,9 +63,17 @@ class CoupledFits:
         # response to constants times its own vertex's position, as the row-sum correction
         # of `operator` does, so that the round-off of ill-conditioned fits cannot show as
         # W @ 1 != 1; row i's correction reads only its own vertex (locality is kept)
+        if "_constant_response" not in self.__dict__:
+            # the first call maps X and the constants together (one pass over the matrices;
+            # every column's sums are the same as alone)
+            both = self._map(np.column_stack([X.reshape(len(X), -1), np.ones(len(X))]))
+            self.__dict__["_constant_response"] = both[:, -1].copy()
+            mapped = both[:, :-1].reshape((-1,) + X.shape[1:])
+        else:
+            mapped = self._map(X)
         r = self._constant_response
         own = X[np.arange(len(r)) // (len(r) // self.shape[1])]
-        return self._map(X) - (r * own if X.ndim == 1 else r[:, None] * own)
+        return mapped - (r * own if X.ndim == 1 else r[:, None] * own)
 
     @cached_property
     def _constant_response(self) -> np.ndarray:
@@ -256,8 +264,7 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     # the rows' monomials, only those of each vertex's own degree (the others have zero
     # coefficients): Bu (SC, V MMAX) csr and the scaled Bs^T (V MMAX, SC) csc, built
     # directly in compressed form (no coo sort: these are the largest matrices)
-    active = (np.arange(mmax)[None, :]
-              < np.array([n_monomials(d) for d in degrees])[smp.vertex][:, None])
+    active = np.arange(mmax)[None, :] < n_monomials(np.asarray(degrees))[smp.vertex][:, None]
     cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active]
     ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))])
     Bu = sp.csr_matrix((smp.Bu[active], cols, ptr), shape=(SC, V * mmax))

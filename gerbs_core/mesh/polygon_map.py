@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 
-__all__ = ["corner_weights", "map_to_polygon"]
+__all__ = ["corner_weights", "map_to_polygon", "map_points"]
 
 
 def _params(lat, local: bool):
@@ -62,7 +62,14 @@ def map_to_polygon(lat, corners2d, centers=None, local: bool = False) -> np.ndar
         raise InvalidParameterError("corners2d", f"must have shape ({tp.n_corners}, d), got "
                                     f"{X.shape}")
     ctr = _fan_centres(tp, X, centers) if centers is not None else None  # checked always
-    face, fan, uv = _params(lat, local)
+    return map_points(tp, X, *_params(lat, local), ctr)
+
+
+def map_points(tp, X, face, fan, uv, ctr=None) -> np.ndarray:
+    """(N, d) points of parameters (face (N,), fan (N,), uv (N, 2)) (those of
+    :mod:`gerbs_core.mesh.lattice`) in the polygons of the corner coordinates X (C, d);
+    ctr (F, d) the n-gons' fan centres (default the corners' mean). The same formulas
+    for any points: a template point of a face maps as that face's lattice sample."""
     fo, n = tp.face_offsets[face], tp.face_sizes[face]
     a, b = uv[:, :1], uv[:, 1:]
     out = np.empty((len(face), X.shape[1]))
