@@ -16,7 +16,9 @@ ROOT = Path(__file__).resolve().parents[2]
 VARIANTS = [("immersion", "variant"), ("adaptive_coupling", "variant"),
             ("spread_coupling", "variant"), ("spread_fits", "variant"),
             ("spread_fits", "gated"), ("flip", "off"), ("flip", "flip135"),
-            ("ridges", "half"), ("ridges", "line")]
+            ("ridges", "half"), ("ridges", "line"), ("ridges", "targeted"),
+            ("blend_fold", "b1000"), ("grad_tension", "g1"), ("grad_tension", "g1s90"),
+            ("grad_tension", "with_ridges")]
 
 
 @pytest.fixture(scope="module")

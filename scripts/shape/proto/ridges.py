@@ -32,7 +32,6 @@ import gerbs_core.mesh.agreement as ag  # noqa: E402
 import gerbs_core.mesh.assembly as asm  # noqa: E402
 import gerbs_core.mesh.evaluate as ev  # noqa: E402
 import gerbs_core.mesh.spread_fits as spf  # noqa: E402
-from gerbs_core.gauge.jet import partition_jet  # noqa: E402
 from gerbs_core.mesh.monomials import monomials  # noqa: E402
 from shape.proto.ridge_basis import DEG, MM, find_ridges, ridge_candidates  # noqa: E402
 
@@ -40,7 +39,7 @@ OPTS = {"sharp": 90.0, "sharp_max": 180.0, "quads": False, "spiky": False, "allo
         "poly": 3, "kind": "half", "delta": 0.5, "dscale": "edge", "kmax": 5, "merge": 20.0,
         "kappa": 0.3, "metric": np.pi, "gate": 0.5, "margin": 1.0,
         # state of the current build
-        "ctx": None, "ridges": None, "index": None, "active": None}
+        "ctx": None, "ridges": None, "index": None, "active": None, "eval_u": None}
 
 
 # ------------------------------------------------------------------ patches of the build
@@ -147,32 +146,29 @@ def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None,
 
 
 # ------------------------------------------------------------ patches of the evaluation
-def corner_terms(model, n, faces, xb, nu, degree=None):
-    topo, ch = model.topology, model.charts
-    corners = topo.face_offsets[faces][None, :] + np.arange(n)[:, None]
-    cb = np.broadcast_to(corners[:, :, None], (n,) + xb.shape[:2])
-    psi, pol = model.cover.psi_jet(ch, cb, xb[None], nu)
-    Psi = partition_jet(psi, nu)
-    u = topo.face_vertices[corners]
-    d = model.max_degree if degree is None else degree
-    yy = ch.to_chart(cb, xb[None], nu, pol=pol)
-    mm = monomials(yy[0], d, nu)
-    rd = OPTS["ridges"]
-    if OPTS["index"] is not None and d == 4:
-        ub = np.broadcast_to(u[:, :, None], cb.shape)
-        sel = rd.at[ub] >= 0
-        if sel.any():
-            got = rd.basis(ub[sel], yy[0][sel], OPTS["rings_h"], nu)
-            for k in range(nu + 1):
-                mm[k][sel] = got[k]
-    mono = [mm[0]]
-    if nu >= 1:
-        mono.append(np.einsum("...mi,...ij->...mj", mm[1], yy[1]))
-    if nu >= 2:
-        J = yy[1]
-        mono.append(np.einsum("...mik,...ij,...kl->...mjl", mm[2], J, J)
-                    + np.einsum("...mi,...ijk->...mjk", mm[1], yy[2]))
-    return u, Psi, mono, psi[0].max(axis=0)
+def corner_terms(model, n, faces, xb, nu, degree=None, _old=ev.corner_terms):
+    """evaluate.corner_terms with the slots' vertices known to :func:`eval_monomials`."""
+    topo = model.topology
+    u = topo.face_vertices[topo.face_offsets[faces][None, :] + np.arange(n)[:, None]]
+    OPTS["eval_u"] = np.broadcast_to(u[:, :, None], (n,) + xb.shape[:2])
+    try:
+        return _old(model, n, faces, xb, nu, degree)
+    finally:
+        OPTS["eval_u"] = None
+
+
+def eval_monomials(y, degree, nu=0, _old=monomials):
+    """The corner terms' monomials (chart derivatives), the ridge vertices' slots replaced."""
+    mm = _old(y, degree, nu)
+    ub = OPTS.get("eval_u")
+    if OPTS["index"] is None or ub is None or degree != 4 or ub.shape != y.shape[:-1]:
+        return mm
+    sel = OPTS["ridges"].at[ub] >= 0
+    if sel.any():
+        got = OPTS["ridges"].basis(ub[sel], y[sel], OPTS["rings_h"], nu)
+        for k in range(nu + 1):
+            mm[k][sel] = got[k]
+    return mm
 
 
 def write_mono(data_e, cols_e, e0, y, w, vertex, Mt, _old=asm._write_mono):
@@ -207,6 +203,7 @@ def patched(**opts):
                                  (ag, "first_minimum", first_minimum),
                                  (ag, "coupled_fits", coupled),
                                  (ev, "corner_terms", corner_terms),
+                                 (ev, "monomials", eval_monomials),
                                  (asm, "_write_mono", write_mono)])
 
 
