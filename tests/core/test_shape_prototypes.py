@@ -15,7 +15,10 @@ ROOT = Path(__file__).resolve().parents[2]
 
 VARIANTS = [("immersion", "variant"), ("adaptive_coupling", "variant"),
             ("spread_coupling", "variant"), ("spread_fits", "variant"),
-            ("spread_fits", "gated"), ("flip", "off"), ("flip", "flip135")]
+            ("spread_fits", "gated"), ("flip", "off"), ("flip", "flip135"),
+            ("ridges", "half"), ("ridges", "line"), ("ridges", "targeted"),
+            ("blend_fold", "b1000"), ("grad_tension", "g1"), ("grad_tension", "g1s90"),
+            ("grad_tension", "with_ridges")]
 
 
 @pytest.fixture(scope="module")
@@ -35,3 +38,35 @@ def test_prototype_variant_builds_an_interpolating_surface(suzanne, module, name
     assert np.all(np.isfinite(P)) and len(out["triangles"])
     # every cage vertex is an output point (the samples at the vertices come first)
     assert np.abs(P[:len(V)] - V).max() < 1e-9
+
+
+def test_ridge_prototype_is_a_linear_map_that_changes_the_mouth(suzanne, monkeypatch):
+    """The ridge candidate (scripts/shape/proto/ridges.py) is chosen at some of Suzanne's
+    vertices, and its non-polynomial basis is evaluated alike by the tessellation and the
+    stencil: the output stays W X with rows summing to 1, interpolating, linear; and it
+    removes the pairs above 90 degrees at the mouth corners (6 without it)."""
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    R = importlib.import_module("shape.proto.ridges")
+    from gerbs_core import BlendingSurface
+    from gerbs_core.testing import dihedral_angles, edge_adjacency
+    V, F = suzanne
+    with R.patched():
+        s = BlendingSurface(V, F)
+        active = R.OPTS["active"]
+        P, T, _ = s.tessellate(4)
+        st = s.stencil(4)
+        Y = np.random.default_rng(0).normal(size=V.shape)
+        PY = s.with_positions(Y).tessellate(4)[0]
+        P8, T8, _ = s.tessellate(8)
+    assert active is not None and len(active) >= 2
+    assert np.abs(st.apply(V) - P).max() < 1e-12
+    assert np.abs(st.apply(Y) - PY).max() < 1e-12
+    assert np.abs(st.apply(np.ones_like(V)) - 1.0).max() < 1e-12
+    assert np.abs(P[:len(V)] - V).max() < 1e-12
+    T8 = np.asarray(T8)
+    ang = dihedral_angles(P8, T8, edge_adjacency(T8))
+    assert (ang > 90).sum() == 0
+    # the default at the same resolution still has them (the control)
+    D, TD, _ = BlendingSurface(V, F).tessellate(8)
+    TD = np.asarray(TD)
+    assert (dihedral_angles(D, TD, edge_adjacency(TD)) > 90).sum() > 0
