@@ -123,10 +123,11 @@ def topology_fresh(t, base, result):
     face_corners = t.node("GeometryNodeCornersOfFace")
     t.link(index, face_corners.inputs["Face Index"])
     material = t.node("GeometryNodeInputMaterialIndex").outputs[0]
-    for value, name in ((face_corners.outputs["Total"], ids.SNAP_FACE_SIZE),
-                        (material, ids.SNAP_MATERIAL)):
-        checks.append(t.none_differ(base, "FACE", t.compare(
-            "INT", "NOT_EQUAL", value, t.sample(result, name, "INT", "FACE", index))))
+    # one pass over the faces for both (a face differs in its size or its material)
+    checks.append(t.none_differ(base, "FACE", t.boolean("OR", *(t.compare(
+        "INT", "NOT_EQUAL", value, t.sample(result, name, "INT", "FACE", index))
+        for value, name in ((face_corners.outputs["Total"], ids.SNAP_FACE_SIZE),
+                            (material, ids.SNAP_MATERIAL))))))
     ends = t.node("GeometryNodeInputMeshEdgeVertices")
     differ = t.boolean("OR", *(t.compare("INT", "NOT_EQUAL", ends.outputs[out],
                                          t.sample(result, name, "INT", "EDGE", index))
