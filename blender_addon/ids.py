@@ -36,7 +36,8 @@ GROUP_VERSION = 7  # 2: checks the result against its input; 3: no Degree / Face
 # and a render result, the built settings and carried attributes recorded on each result
 # (no "Built ..." inputs), the input passed on while stale; 6: the channel says which
 # record the input's topology and carried layers equal (CHANNEL_RECORD); 7: the checks
-# reduce over a selection (node_helpers.Tree.none_differ), one pass over the faces
+# reduce over a selection (node_helpers.Tree.none_differ), one pass over the faces, one
+# comparison per value (node_fresh._differs)
 PART_TAG = "gerbs_part"  # custom property on each nested node group (node_parts.py): its key
 PART_VERSION = "gerbs_part_version"  # ... and the GROUP_VERSION it was built for
 PART_PREFIX = ".GERBS "  # name prefix of the nested node groups

@@ -91,10 +91,10 @@ def settings_fresh(t, result, current: dict):
 
 
 def _differs(t, compare, value, stored):
-    """`value` differs from `stored` or is not a number: the Compare node's |a - b| > 0
-    is False for NaN, so a NaN is caught by its inequality with itself."""
-    return t.boolean("OR", t.compare(compare, "NOT_EQUAL", value, stored),
-                     t.boolean("NOT", t.compare(compare, "EQUAL", value, value)))
+    """`value` differs from `stored` or either is not a number: NOT(|a - b| <= 0) (the
+    Compare node's EQUAL, element by element), which a NaN or an infinity on either side
+    makes True; its NOT_EQUAL, |a - b| > 0, would be False for them."""
+    return t.boolean("NOT", t.compare(compare, "EQUAL", value, stored))
 
 
 def positions_fresh(t, base, result):

@@ -1,7 +1,8 @@
 """The node group's freshness check is exact: an edit that keeps every count (and every
 position, and every carried value at its index) but changes the topology makes the shown
-result stale, with Live Update off (nothing rebuilds it: only the check stands between
-the edit and a stale surface)."""
+result stale, and so does a position or a carried value turned NaN or infinite, with Live
+Update off (nothing rebuilds it: only the check stands between the edit and a stale
+surface)."""
 import bmesh
 import bpy
 import numpy as np
@@ -86,3 +87,31 @@ def test_a_topology_change_with_the_same_counts_makes_the_result_stale(blender, 
         assert len(evaluated(obj)) == len(P) and warnings(obj) == []
     else:
         assert np.array_equal(evaluated(obj), P) and warnings(obj) == []
+
+
+def _vertex_to(value):
+    def edit(mesh):
+        mesh.vertices[5].co.y = value
+    return edit
+
+
+def _uv_to(value):
+    def edit(mesh):
+        mesh.uv_layers.active.data[4].uv.x = value
+    return edit
+
+
+@pytest.mark.parametrize("edit", [_vertex_to(float("nan")), _vertex_to(float("inf")),
+                                  _uv_to(float("nan")), _uv_to(float("-inf"))])
+def test_a_value_turned_nan_or_infinite_makes_the_result_stale(blender, edit):
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    api.add_surface(obj, resolution=2)
+    evaluated(obj)
+    bpy.context.scene.gerbs.live_update = False
+    edit(obj.data)
+    obj.data.update()
+    X = positions(obj.data)
+    assert np.array_equal(evaluated(obj), X, equal_nan=True)
+    assert "out of date" in warnings(obj)[0][1]
