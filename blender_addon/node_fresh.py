@@ -93,7 +93,7 @@ def settings_fresh(t, result, current: dict):
 def _differs(t, compare, value, stored):
     """`value` differs from `stored` or either is not a number: NOT(|a - b| <= 0) (the
     Compare node's EQUAL, element by element), which a NaN or an infinity on either side
-    makes True; its NOT_EQUAL, |a - b| > 0, would be False for them."""
+    makes True; its NOT_EQUAL, |a - b| > 0, is False for a NaN and for equal infinities."""
     return t.boolean("NOT", t.compare(compare, "EQUAL", value, stored))
 
 

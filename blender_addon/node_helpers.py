@@ -104,7 +104,8 @@ class Tree:
         True (its selection): its Max is 1 if there is one, 0 over none. Blender turns
         the selection into an index mask and gathers nothing when no element differs;
         the statistic of `differs` itself would convert it to a float array, copy it and
-        scan it (35k-vertex triangle mesh: the topology check 9.8 -> 5.5 ms, loaded)."""
+        scan it (with one pass over the faces, node_fresh: the 35k-vertex triangle mesh's
+        topology checks 7.1 -> 4.2 ms at load 3)."""
         stat = self.node("GeometryNodeAttributeStatistic", data_type="FLOAT", domain=domain)
         self.link(geometry, stat.inputs["Geometry"])
         stat.inputs["Attribute"].default_value = 1.0
