@@ -91,6 +91,11 @@ def write_carried(res, mod, transfer: Transfer, inp, record) -> str:
     carried = inp.carried
     carry_write.write_layers(res, [transfer.layer(layer) for layer in carried.layers], carried)
     stamp = snapshot.write_snapshot(res.data, inp, record)
-    gn.set_names(mod, snapshot.layer_table(carried)[0])
+    if gn.set_names(mod, snapshot.layer_table(carried)[0]):
+        # writing the modifier's property tags nothing: without the tag the depsgraph's
+        # second pass re-evaluates the object (its result changed) with the old names in
+        # its evaluated copy of the modifier, finds the new record's layers unnamed and
+        # shows the input (a layer added with a move in Edit Mode did until the next edit)
+        mod.id_data.update_tag()
     res.data.update()
     return stamp

@@ -31,11 +31,13 @@ SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
 NODE_GROUP_NAME = "GERBS Blending Surface"
 MODIFIER_NAME = "GERBS Blending Surface"
 GROUP_TAG = "gerbs_group_version"  # custom property on the node group
-GROUP_VERSION = 6  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
+GROUP_VERSION = 7  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
 # Shape; 4: Merge by Distance, Merge Distance and the Warning line; 5: Render Resolution
 # and a render result, the built settings and carried attributes recorded on each result
 # (no "Built ..." inputs), the input passed on while stale; 6: the channel says which
-# record the input's topology and carried layers equal (CHANNEL_RECORD)
+# record the input's topology and carried layers equal (CHANNEL_RECORD); 7: the checks
+# reduce over a selection (node_helpers.Tree.none_differ), one pass over the faces, one
+# comparison per value (node_fresh._differs)
 PART_TAG = "gerbs_part"  # custom property on each nested node group (node_parts.py): its key
 PART_VERSION = "gerbs_part_version"  # ... and the GROUP_VERSION it was built for
 PART_PREFIX = ".GERBS "  # name prefix of the nested node groups

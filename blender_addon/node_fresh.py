@@ -91,10 +91,10 @@ def settings_fresh(t, result, current: dict):
 
 
 def _differs(t, compare, value, stored):
-    """`value` differs from `stored` or is not a number: the Compare node's |a - b| > 0
-    is False for NaN, so a NaN is caught by its inequality with itself."""
-    return t.boolean("OR", t.compare(compare, "NOT_EQUAL", value, stored),
-                     t.boolean("NOT", t.compare(compare, "EQUAL", value, value)))
+    """`value` differs from `stored` or either is not a number: NOT(|a - b| <= 0) (the
+    Compare node's EQUAL, element by element), which a NaN or an infinity on either side
+    makes True; its NOT_EQUAL, |a - b| > 0, is False for a NaN and for equal infinities."""
+    return t.boolean("NOT", t.compare(compare, "EQUAL", value, stored))
 
 
 def positions_fresh(t, base, result):
@@ -123,10 +123,11 @@ def topology_fresh(t, base, result):
     face_corners = t.node("GeometryNodeCornersOfFace")
     t.link(index, face_corners.inputs["Face Index"])
     material = t.node("GeometryNodeInputMaterialIndex").outputs[0]
-    for value, name in ((face_corners.outputs["Total"], ids.SNAP_FACE_SIZE),
-                        (material, ids.SNAP_MATERIAL)):
-        checks.append(t.none_differ(base, "FACE", t.compare(
-            "INT", "NOT_EQUAL", value, t.sample(result, name, "INT", "FACE", index))))
+    # one pass over the faces for both (a face differs in its size or its material)
+    checks.append(t.none_differ(base, "FACE", t.boolean("OR", *(t.compare(
+        "INT", "NOT_EQUAL", value, t.sample(result, name, "INT", "FACE", index))
+        for value, name in ((face_corners.outputs["Total"], ids.SNAP_FACE_SIZE),
+                            (material, ids.SNAP_MATERIAL))))))
     ends = t.node("GeometryNodeInputMeshEdgeVertices")
     differ = t.boolean("OR", *(t.compare("INT", "NOT_EQUAL", ends.outputs[out],
                                          t.sample(result, name, "INT", "EDGE", index))

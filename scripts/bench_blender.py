@@ -2,6 +2,7 @@
 """GERBS modifier vs Blender's Subdivision Surface modifier, in one bpy run.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/bench_blender.py [--repeats 5] [--quick]
+    ... [--edit-only] --large   (only the Edit Mode timings on the 35k mesh, ~2-4 min)
 
 For Suzanne, an icosphere and a 32x32 grid, and Subsurf levels giving ~30k and
 ~120k output vertices, the GERBS resolution is the one whose output vertex
@@ -22,12 +23,16 @@ too): a selection change through the select operator (``select_all``, which tags
 only the selection, as every select tool does), a selection change by a script
 (bmesh, then ``update_edit_mesh``: that tags the geometry, so Blender evaluates
 every modifier), and a one-vertex move (bmesh, then a depsgraph update), with the
-GERBS modifier and without it (its "Edit Mode" toggle off: Blender does not
-evaluate it), alternated round by round; each the median of 3 within a round. Timed:
-the edit and the depsgraph update; of it, the time in the add-on's handler ("ours";
-the rest is Blender's: converting the edit mesh, evaluating the node group twice for
-a move); apart, reading the evaluated positions (with the modifier the surface's,
-without it nothing: the evaluated mesh is then the edit mesh, with no vertices).
+GERBS modifier, with the anchors instead (Blender's Subdivision Surface, level 2, and a
+do-nothing Geometry Nodes modifier, input to output: what any modifier costs there,
+Blender converting the edit mesh for it) and with no modifier evaluated (each one's
+"Edit Mode" toggle off: Blender then shows the edit mesh as it is), alternated round by
+round; each the median of 3 within a round. "x": the median over the rounds of the
+ratio to no modifier within a round (so a target of 1.5x no modifier is below what a
+do-nothing modifier costs), and for GERBS also to the do-nothing GN. Timed: the edit
+and the depsgraph update; of it, the time in the add-on's handler ("ours"; the rest is
+Blender's: converting the edit mesh, evaluating the node group, twice for a move);
+apart, reading the evaluated positions ("read", the surface's).
 "pair" is the median over the rounds of (GERBS / Subsurf) within a round,
 less sensitive to load changing during the run than the ratio of the medians.
 The add-on's node group is made once (printed: "group"; it is removed with the
@@ -47,6 +52,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "scripts"))
 
 
 def median_time(fn, repeats):
@@ -207,8 +213,11 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="only the ~30k level")
     ap.add_argument("--large", action="store_true", help="also the 35k-vertex triangle mesh")
     ap.add_argument("--edit", action="store_true", help="Edit Mode timings (35k mesh with --large)")
+    ap.add_argument("--edit-only", action="store_true",
+                    help="only the Edit Mode timings (implies --edit)")
     ap.add_argument("--only", nargs="*", help="only these meshes (names as printed)")
     args = ap.parse_args(argv)
+    args.edit = args.edit or args.edit_only
     import bpy
 
     import blender_addon
@@ -221,6 +230,12 @@ def main(argv=None) -> int:
     gn.ensure_group().use_fake_user = True  # kept through the add/remove rounds
     print(f"group: {time.perf_counter() - t0:.3f} s to make the node group (once per file)")
     objects = make_objects(bpy, args.large)
+    from bench_edit import edit_mode
+
+    if args.edit_only:
+        edit_mode(bpy, objects["tri 35k" if args.large else "suzanne"], args.repeats)
+        blender_addon.unregister()
+        return 0
     levels = {"suzanne": (3, 4), "icosphere": (3, 4), "grid 32x32": (3, 4), "grid 64x64": (2, 3),
               "tri 35k": (2,)}   # triangles: level 3 matches r = 10 (3.5M points, over budget)
     print(f"{'mesh':<11} {'lvl':>3} {'subsurf pts':>11} {'r':>3} {'gerbs pts':>10} {'diff':>6} | "
@@ -228,7 +243,7 @@ def main(argv=None) -> int:
           f"{'1vert S':>8} {'1vert G':>8} {'G/S':>5} {'1v bound':>8} {'G/S':>5} | "
           f"{'all S':>8} {'all G':>8} {'G/S':>5}")
     for name, obj in objects.items():
-        if args.only and name not in args.only:
+        if args.edit_only or (args.only and name not in args.only):
             continue
         for level in levels[name][: 1 if args.quick else 2]:
             n_sub, n_g, r, rows = bench_pair(bpy, obj, level, args.repeats)
@@ -242,100 +257,6 @@ def main(argv=None) -> int:
         edit_mode(bpy, objects["tri 35k" if args.large else "suzanne"], args.repeats)
     blender_addon.unregister()
     return 0
-
-
-class HandlerClock:
-    """Times the add-on's depsgraph handler (what of an update is ours in Python) by
-    putting a timing wrapper in its place in ``depsgraph_update_post``."""
-
-    def __init__(self, bpy):
-        from blender_addon import handlers
-
-        self.total, self.lst, self.inner = 0.0, bpy.app.handlers.depsgraph_update_post, \
-            handlers.on_depsgraph_update
-
-        def timed(scene, depsgraph):
-            t0 = time.perf_counter()
-            self.inner(scene, depsgraph)
-            self.total += time.perf_counter() - t0
-
-        self.timed = timed
-        self.lst[self.lst.index(self.inner)] = timed
-
-    def restore(self):
-        self.lst[self.lst.index(self.timed)] = self.inner
-
-
-def edit_mode(bpy, obj, repeats):
-    """Edit Mode update costs with and without the modifier (module docstring)."""
-    import bmesh
-
-    from blender_addon import api
-
-    for o in bpy.context.view_layer.objects:
-        o.select_set(o == obj)
-    bpy.context.view_layer.objects.active = obj
-    obj.modifiers.clear()
-    mod = api.add_surface(obj, resolution=2, rest="bound")
-    evaluated_positions(bpy, obj)
-    bpy.ops.object.mode_set(mode="EDIT")
-    bm = bmesh.from_edit_mesh(obj.data)
-    bm.verts.ensure_lookup_table()
-    v = bm.verts[len(bm.verts) // 2]
-    k = [0]
-
-    def select_op():  # what the select tools do (ID_RECALC_SELECT)
-        bpy.ops.mesh.select_all(action="TOGGLE")
-
-    def select_script():  # a script's selection change: tags the geometry
-        k[0] += 1
-        v.select_set(k[0] % 2 == 0)
-        bmesh.update_edit_mesh(obj.data, loop_triangles=False, destructive=False)
-
-    def move():
-        k[0] += 1
-        v.co.z += 1e-3 * (-1) ** k[0]
-        bmesh.update_edit_mesh(obj.data, loop_triangles=False, destructive=False)
-
-    clock = HandlerClock(bpy)
-
-    def timed(fn):
-        """(edit + depsgraph update, time in our handler, reading the evaluated positions)"""
-        clock.total = 0.0
-        t0 = time.perf_counter()
-        fn()
-        bpy.context.evaluated_depsgraph_get().update()
-        t1 = time.perf_counter()
-        mesh = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
-        attr = mesh.attributes.get("position")  # none: the edit mesh itself (no modifier)
-        if attr is not None:
-            attr.data.foreach_get("vector", np.empty(len(mesh.vertices) * 3, np.float32))
-        return t1 - t0, clock.total, time.perf_counter() - t1
-
-    cases = {"selection (select operator)": select_op, "selection (script)": select_script,
-             "one-vertex move": move}
-    rows = {(name, on): [] for name in cases for on in (True, False)}
-    for _ in range(max(repeats, 7)):  # rounds: with and without, side by side
-        for on in (True, False):
-            mod.show_in_editmode = on  # off: Blender does not evaluate GERBS in Edit Mode
-            for name, fn in cases.items():
-                timed(fn)  # the first update after a switch: not timed
-                rows[name, on].append(sorted((timed(fn) for _ in range(3)), key=lambda r: r[0])[1])
-    clock.restore()
-    mod.show_in_editmode = True
-    bpy.ops.object.mode_set(mode="OBJECT")
-    api.remove(obj)
-    print(f"Edit Mode, {obj.name} ({len(obj.data.vertices)} vertices), GERBS r=2 rest=bound, "
-          f"{max(repeats, 7)} rounds (medians; pair: median of with / without per round;\n"
-          f"  update: the edit and the depsgraph update, ours: of it in the add-on's handler, "
-          f"read: the evaluated positions after it)")
-    for name in cases:
-        on, off = ([statistics.median(r[i] for r in rows[name, x]) for i in range(3)]
-                   for x in (True, False))
-        pair = statistics.median(a[0] / b[0] for a, b in zip(rows[name, True], rows[name, False]))
-        print(f"  {name:<28} with {on[0] * 1e3:8.2f} ms (ours {on[1] * 1e3:6.2f}, Blender "
-              f"{(on[0] - on[1]) * 1e3:6.2f})  without {off[0] * 1e3:7.2f} ms  pair {pair:6.2f}x"
-              f"  | read {on[2] * 1e3:5.2f} / {off[2] * 1e3:5.2f} ms", flush=True)
 
 
 if __name__ == "__main__":

@@ -236,12 +236,51 @@ def test_a_stale_face_size_channel_in_the_mesh_is_never_taken_for_the_faces(blen
     before = _reads()
     bm.verts.layers.float.new("new_layer")       # a layer the record lacks: read in full
     bm.verts[3].co.z += 0.05
-    _update(obj)
+    P = _update(obj)          # the first evaluation already shows the surface
     assert _more(before, _reads()) == {"full": 1, "positions": 0}
     assert not gn.get_error(mod)
-    P = _update(obj)          # the next evaluation (nothing changed) shows the surface
     X_new, faces = _bm_mesh(bm)
     assert all(len(f) == 3 for f in faces)
     fresh = _expected(obj, X, X_new.astype(np.float64))
     assert np.abs(P - fresh).max() <= 1e-5
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def _add_layer(bm):
+    bm.verts.layers.float.new("added")
+
+
+def _remove_layer(bm):
+    bm.loops.layers.uv.remove(bm.loops.layers.uv.active)
+
+
+def _change_uv(bm):
+    uv = bm.loops.layers.uv.active
+    bm.faces.ensure_lookup_table()
+    bm.faces[0].loops[0][uv].uv.x += 0.25
+
+
+@pytest.mark.parametrize("edit", [_add_layer, _remove_layer, _change_uv])
+def test_the_first_evaluation_after_a_full_read_edit_shows_the_edited_surface(blender, edit):
+    """A move together with an edit that makes the sync read in full (a layer added or
+    removed: the layer names on the modifier change; a UV edited: they do not): the very
+    evaluation that synced it shows the surface of the edited mesh, not the input passed on
+    (the cage) nor the surface before the edit, with the record of the new layers."""
+    from blender_addon import geometry_nodes as gn
+    from blender_addon import snapshot
+
+    obj, mod, bm, X, P0 = _edit()
+    bm.verts[3].co.z += 0.05
+    _update(obj)
+    before = _reads()
+    edit(bm)
+    bm.verts[7].co.z -= 0.1
+    P = _update(obj)
+    assert _more(before, _reads()) == {"full": 1, "positions": 0}
+    X_new, _ = _bm_mesh(bm)
+    assert P.shape == P0.shape  # not the cage (the icosphere's 162 vertices at R = 2)
+    assert np.abs(P - _expected(obj, X, X_new.astype(np.float64))).max() <= 1e-5
+    names = set(bm.verts.layers.float.keys()) | set(bm.loops.layers.uv.keys())
+    recorded = snapshot.read_snapshot(gn.get_result(mod).data, gn.get_names(mod))
+    assert names <= {layer.name for layer in recorded.carried.layers}
     bpy.ops.object.mode_set(mode="OBJECT")

@@ -80,6 +80,27 @@ def test_fast_path_reuses_stencil_and_matches_rebuild(blender):
     assert np.abs(P_fast - want).max() <= 1e-6
 
 
+
+def test_a_layer_added_with_a_move_shows_the_surface_at_once(blender):
+    """Object Mode, Rest Shape Bound: an attribute added and a vertex moved in one update
+    (the stencil's update with new layer names on the modifier): the evaluation that synced
+    it shows the moved surface, not the base mesh passed on."""
+    from gerbs_core import BlendingSurface
+    from blender_addon import api
+    from blender_addon.mesh_io import faces_from_csr
+
+    obj = make_object("icosphere")
+    api.add_surface(obj, resolution=R, rest="bound")
+    P0, X = evaluated(obj), positions(obj.data)
+    obj.data.attributes.new("added", "FLOAT", "POINT")
+    obj.data.vertices[3].co.z += 0.05
+    obj.data.update()
+    P, X2 = evaluated(obj), positions(obj.data)
+    assert P.shape == P0.shape
+    offsets, corners = topology(obj.data)
+    want = BlendingSurface(X2, faces_from_csr(offsets, corners), rest_positions=X).tessellate(R)[0]
+    assert np.abs(P - want).max() <= 1e-5 and np.abs(P - P0).max() > 1e-3
+
 def test_topology_change_rebuilds(blender):
     from blender_addon import api
 

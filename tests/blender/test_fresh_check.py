@@ -1,0 +1,117 @@
+"""The node group's freshness check is exact: an edit that keeps every count (and every
+position, and every carried value at its index) but changes the topology makes the shown
+result stale, and so does a position or a carried value turned NaN or infinite, with Live
+Update off (nothing rebuilds it: only the check stands between the edit and a stale
+surface)."""
+import bmesh
+import bpy
+import numpy as np
+import pytest
+
+from .helpers import evaluated, make_object, positions, warnings
+
+pytestmark = pytest.mark.blender
+
+
+def _loops(mesh):
+    """(vertex (C,), edge (C,)) of every corner."""
+    v, e = (np.empty(len(mesh.loops), dtype=np.int32) for _ in range(2))
+    mesh.loops.foreach_get("vertex_index", v)
+    mesh.loops.foreach_get("edge_index", e)
+    return v, e
+
+
+def _set_loops(mesh, v, e):
+    mesh.loops.foreach_set("vertex_index", v)
+    mesh.loops.foreach_set("edge_index", e)
+
+
+def _rotate_face_corners(mesh):
+    """The first face's corners start one later (same vertices, edges, UVs per corner)."""
+    v, e = _loops(mesh)
+    start, size = mesh.polygons[0].loop_start, mesh.polygons[0].loop_total
+    run = slice(start, start + size)
+    v[run], e[run] = np.roll(v[run], -1), np.roll(e[run], -1)
+    _set_loops(mesh, v, e)
+
+
+def _swap_edges(mesh):
+    """Edges 0 and 5 trade places (their vertices, and the corners naming them)."""
+    ends = np.empty(2 * len(mesh.edges), dtype=np.int32)
+    mesh.edges.foreach_get("vertices", ends)
+    ends = ends.reshape(-1, 2)
+    ends[[0, 5]] = ends[[5, 0]]
+    mesh.edges.foreach_set("vertices", ends.ravel())
+    v, e = _loops(mesh)
+    e = np.where(e == 0, 5, np.where(e == 5, 0, e)).astype(np.int32)
+    _set_loops(mesh, v, e)
+
+
+def _flip_edge(mesh):
+    """An edge between two triangles rotated (the icosphere keeps all its counts)."""
+    bm = bmesh.new()
+    bm.from_mesh(mesh)
+    bm.edges.ensure_lookup_table()
+    assert bmesh.ops.rotate_edges(bm, edges=[bm.edges[10]], use_ccw=False)["edges"]
+    bm.to_mesh(mesh)
+    bm.free()
+
+
+def _rewrite_same(mesh):
+    """Control: the same corners written again (nothing changes)."""
+    _set_loops(mesh, *_loops(mesh))
+
+
+def _counts(mesh):
+    return len(mesh.vertices), len(mesh.edges), len(mesh.polygons), len(mesh.loops)
+
+
+@pytest.mark.parametrize("edit, stale", [(_rotate_face_corners, True), (_swap_edges, True),
+                                         (_flip_edge, True), (_rewrite_same, False)])
+def test_a_topology_change_with_the_same_counts_makes_the_result_stale(blender, edit, stale):
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    api.add_surface(obj, resolution=2)
+    P = evaluated(obj)
+    bpy.context.scene.gerbs.live_update = False
+    mesh = obj.data
+    X, counts = positions(mesh), _counts(mesh)
+    edit(mesh)
+    mesh.update()
+    assert not mesh.validate(verbose=False)  # a valid mesh: a user could make it
+    assert _counts(mesh) == counts and np.array_equal(positions(mesh), X)
+    if stale:  # the input passed on, with the warning
+        assert np.array_equal(evaluated(obj), X) and "out of date" in warnings(obj)[0][1]
+        api.update(obj)  # the explicit update builds the new topology's surface
+        assert len(evaluated(obj)) == len(P) and warnings(obj) == []
+    else:
+        assert np.array_equal(evaluated(obj), P) and warnings(obj) == []
+
+
+def _vertex_to(value):
+    def edit(mesh):
+        mesh.vertices[5].co.y = value
+    return edit
+
+
+def _uv_to(value):
+    def edit(mesh):
+        mesh.uv_layers.active.data[4].uv.x = value
+    return edit
+
+
+@pytest.mark.parametrize("edit", [_vertex_to(float("nan")), _vertex_to(float("inf")),
+                                  _uv_to(float("nan")), _uv_to(float("-inf"))])
+def test_a_value_turned_nan_or_infinite_makes_the_result_stale(blender, edit):
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    api.add_surface(obj, resolution=2)
+    evaluated(obj)
+    bpy.context.scene.gerbs.live_update = False
+    edit(obj.data)
+    obj.data.update()
+    X = positions(obj.data)
+    assert np.array_equal(evaluated(obj), X, equal_nan=True)
+    assert "out of date" in warnings(obj)[0][1]
