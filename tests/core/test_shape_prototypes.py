@@ -15,7 +15,9 @@ ROOT = Path(__file__).resolve().parents[2]
 
 VARIANTS = [("immersion", "variant"), ("adaptive_coupling", "variant"),
             ("spread_coupling", "variant"), ("spread_fits", "variant"),
-            ("spread_fits", "gated"), ("flip", "off"), ("flip", "flip135")]
+            ("spread_fits", "gated"), ("flip", "off"), ("flip", "flip135"),
+            ("chart_angles", "cap135_obtuse"), ("chart_angles", "cap120"),
+            ("cover_knobs", "kappa90_shrink97")]
 
 
 @pytest.fixture(scope="module")
@@ -35,3 +37,15 @@ def test_prototype_variant_builds_an_interpolating_surface(suzanne, module, name
     assert np.all(np.isfinite(P)) and len(out["triangles"])
     # every cage vertex is an output point (the samples at the vertices come first)
     assert np.abs(P[:len(V)] - V).max() < 1e-9
+
+
+def test_fold_cover_prototype_leaves_holes(suzanne, monkeypatch):
+    """The fold-aware cover's measured outcome (docs/design.md, "Folds"): the corners it
+    caps turn at the vertex itself, so the cap reaches the first lattice ring and the
+    cover has holes (found by the samples at r = 8)."""
+    from gerbs_core.errors import InvalidParameterError
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    fc = importlib.import_module("shape.proto.fold_cover")
+    V, F = suzanne
+    with pytest.raises(InvalidParameterError, match="holes"):
+        fc.variant(V, F, 8, exact=False)
