@@ -42,15 +42,16 @@ class FoldCaps(sk.SpokeCaps):
     Um: np.ndarray = None
 
     def profile(self, corners, theta, nu: int):
+        """The spoke caps' profile plus Um's knot: Um F on the first half, Um (1 - F) on
+        the second (the same local coordinate as the parent's)."""
+        base = super().profile(corners, theta, nu)
         c = np.broadcast_to(corners, theta.shape)
-        ta, tb = self.ta[c], self.tb[c]
-        h = 0.5 * (tb - ta)
+        ta, h = self.ta[c], 0.5 * (self.tb[c] - self.ta[c])
         first = theta <= ta + h
-        w = np.clip(np.where(first, theta - ta, theta - ta - h) / h, 0.0, 1.0)
-        rise = rising_jet(self.kernel, w, h, nu)
-        fall = falling_jet(rise)
-        um = self.Um[c]
-        return list(np.where(first, self.Ua[c] * fall + um * rise, um * fall + self.Ub[c] * rise))
+        rise = rising_jet(self.kernel, np.clip((theta - ta - np.where(first, 0.0, h)) / h,
+                                               0.0, 1.0), h, nu)
+        mid = np.where(first, rise, falling_jet(rise)) * self.Um[c]
+        return [b + m for b, m in zip(base, mid)]
 
 
 def caps_with_folds(topo, charts, corners2d, u_of, kernel, _old=sk.spoke_caps):
