@@ -125,6 +125,35 @@ def turned_corners(s):
     return (np.einsum("ij,ij->i", nv[fv], nf[cf]), np.einsum("ij,ij->i", nm[fv], nf[cf]))
 
 
+def turned_candidates(s):
+    """For every corner whose vertex tangent plane is turned more than 90 degrees against
+    its face (:func:`turned_corners`): (corner, angles (K,) in degrees between each
+    candidate fit's tangent plane at the rest shape and the face's rest normal, candidate
+    labels "d<degree>" in the choice's order, base candidates then the spread stars')."""
+    from gerbs_core.mesh.agreement import FairnessRule
+    from gerbs_core.mesh.fits import candidate_fits_all
+    from gerbs_core.mesh.rings import data_rings
+    from gerbs_core.mesh.row_values import candidate_coefs
+    from gerbs_core.mesh.spread_fits import spread_candidates
+    m, X, rule = s.model, s.vertices, FairnessRule()
+    topo, corners = m.topology, s.layouts.corners
+    rings = data_rings(topo, m.charts, corners)
+    cands = candidate_fits_all(rings, rule.candidates)
+    cands = cands + spread_candidates(topo, m.charts, corners, rings, X, rule.spread)[0]
+    V = topo.n_vertices
+    lin = [c.reshape(V, -1, 3)[:, :2] for c in candidate_coefs(cands, X)]
+    fv, cf, nxt = (np.asarray(a) for a in (topo.face_vertices, topo.corner_face,
+                                            topo.corner_next))
+    nf = np.zeros((topo.n_faces, 3))
+    np.add.at(nf, cf, np.cross(X[fv], X[fv[nxt]]))
+    nf = _unit(nf)
+    out = []
+    for c in np.flatnonzero(turned_corners(s)[0] < 0):
+        n = _unit(np.stack([np.cross(L[fv[c], 0], L[fv[c], 1]) for L in lin]))
+        out.append((int(c), np.degrees(np.arccos(np.clip(n @ nf[cf[c]], -1, 1)))))
+    return out, [f"d{c.degree}" for c in cands]
+
+
 def exact_split(s, r=8, threshold=90.0):
     """The pairs above ``threshold`` split by what the exact surface does there: (n pairs,
     n whose exact normals at the two triangles' centroids differ by more than 60 degrees
@@ -204,6 +233,13 @@ def main():
               f"exact normal at its centroid; {in_bad} in a face with a corner whose vertex "
               f"tangent plane is turned > 90 deg against the face ({bad} such corners, the "
               f"area-weighted mean normal turned too at {mean_bad})")
+        rows, labels = turned_candidates(s)
+        print(f"at {sum(bool((a < 90).any()) for _, a in rows)} of those {len(rows)} corners "
+              f"some candidate fit's tangent plane is within 90 deg of the face; corner, "
+              f"vertex, chosen degree, candidates' angles ({' '.join(labels)}):")
+        for c, a in rows:
+            v = int(s.topology.face_vertices[c])
+            print(f"  {c} | {v} | {s.degrees[v]} | {' '.join(f'{x:.0f}' for x in a)}")
 
 
 if __name__ == "__main__":
