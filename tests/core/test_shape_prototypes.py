@@ -18,7 +18,9 @@ VARIANTS = [("immersion", "variant"), ("adaptive_coupling", "variant"),
             ("spread_fits", "gated"), ("flip", "off"), ("flip", "flip135"),
             ("ridges", "half"), ("ridges", "line"), ("ridges", "targeted"),
             ("blend_fold", "b1000"), ("grad_tension", "g1"), ("grad_tension", "g1s90"),
-            ("grad_tension", "with_ridges")]
+            ("grad_tension", "with_ridges"),
+            ("chart_angles", "cap135_obtuse"), ("chart_angles", "cap120"),
+            ("cover_knobs", "kappa90_shrink97")]
 
 
 @pytest.fixture(scope="module")
@@ -70,3 +72,15 @@ def test_ridge_prototype_is_a_linear_map_that_changes_the_mouth(suzanne, monkeyp
     D, TD, _ = BlendingSurface(V, F).tessellate(8)
     TD = np.asarray(TD)
     assert (dihedral_angles(D, TD, edge_adjacency(TD)) > 90).sum() > 0
+
+
+def test_fold_cover_prototype_leaves_holes(suzanne, monkeypatch):
+    """The fold-aware cover's measured outcome (docs/design.md, "Folds"): the corners it
+    caps turn at the vertex itself, so the cap reaches the first lattice ring and the
+    cover has holes (found by the samples at r = 8)."""
+    from gerbs_core.errors import InvalidParameterError
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    fc = importlib.import_module("shape.proto.fold_cover")
+    V, F = suzanne
+    with pytest.raises(InvalidParameterError, match="holes"):
+        fc.variant(V, F, 8, exact=False)
