@@ -20,7 +20,8 @@ VARIANTS = [("immersion", "variant"), ("adaptive_coupling", "variant"),
             ("blend_fold", "b1000"), ("grad_tension", "g1"), ("grad_tension", "g1s90"),
             ("grad_tension", "with_ridges"),
             ("chart_angles", "cap135_obtuse"), ("chart_angles", "cap120"),
-            ("cover_knobs", "kappa90_shrink97")]
+            ("cover_knobs", "kappa90_shrink97"), ("turned_planes", "t90"),
+            ("pinned_planes", "p75")]
 
 
 @pytest.fixture(scope="module")
