@@ -159,23 +159,34 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
     a, b = roomA.astype(float).copy(), roomB.astype(float).copy()
     ok = same.copy()
     t = np.flatnonzero(~same)
+    # the factors that do not change with the widths, once per corner (the same
+    # operations as inside the loop, so the same bits): half of the cosines
+    rAB, rBA = pA / pB, pB / pA
+    cA2, cB2 = np.cos(nA) ** 2, np.cos(nB) ** 2
     for _ in range(iters):
         if not t.size:
             break
-        W = a[t] + b[t]
-        al = a[t] / W
-        gA = G[np.clip(np.ceil(al * n).astype(int), 0, n)]
-        gB = GB[np.clip(np.ceil((1.0 - al) * n).astype(int), 0, n)]
-        eA = np.minimum(np.cos(-a[t] - nA[t]) ** 2, np.cos(nA[t]) ** 2)
-        eB = np.minimum(np.cos(b[t] - nB[t]) ** 2, np.cos(nB[t]) ** 2)
-        okA = W * (pA[t] / pB[t]) * st[t] * gA <= allowA[t] * eA * (1 - 1e-9)
-        okB = W * (pB[t] / pA[t]) * st[t] * gB <= allowB[t] * eB * (1 - 1e-9)
+        at, bt = a[t], b[t]
+        W = at + bt
+        al = at / W
+        gA = G[_grid_index(al, n)]
+        gB = GB[_grid_index(1.0 - al, n)]
+        eA = np.minimum(np.cos(-at - nA[t]) ** 2, cA2[t])
+        eB = np.minimum(np.cos(bt - nB[t]) ** 2, cB2[t])
+        stt = st[t]
+        okA = W * rAB[t] * stt * gA <= allowA[t] * eA * (1 - 1e-9)
+        okB = W * rBA[t] * stt * gB <= allowB[t] * eB * (1 - 1e-9)
         good = okA & okB
         ok[t[good]] = True
-        a[t[~okA]] *= factor
-        b[t[~okB]] *= factor
+        a[t] = np.where(okA, at, at * factor)      # (one scatter per side, same values)
+        b[t] = np.where(okB, bt, bt * factor)
         t = t[~good]
     return a, b, ok
+
+
+def _grid_index(al, n):
+    """ceil(al n) clipped to [0, n] (as np.clip, without its Python-level wrapper)."""
+    return np.minimum(np.maximum(np.ceil(al * n).astype(int), 0), n)
 
 
 def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, factor=_BLEND_SHRINK):

@@ -102,6 +102,7 @@ class GERBSInterpolator:
         tree = cKDTree(pts) if tree is None else tree     # the one tree of the points
         N, n = pts.shape
         self.points, self.n, self._tree = pts, n, tree
+        self._points_t = np.ascontiguousarray(pts.T)     # coordinate-major, for gathers
         self.kernel = _default_kernel() if kernel is None else kernel
         self.fill_value = fill_value
         self.chunk_size = int(chunk_size)
@@ -346,13 +347,17 @@ class GERBSInterpolator:
     def _eval_chunk(self, x, idx, edge, nu):
         idx, Bv, Bg, Bh = self._basis(x, idx, edge, nu)
         j = np.maximum(idx, 0)
-        mono = monomials(x[:, None, :] - self.points[j], self.degree)     # (M, K, Q)
+        # offsets x - x_j coordinate-major: contiguous gathers and monomial rows
+        mono = monomials([x[:, c, None] - self._points_t[c][j] for c in range(self.n)],
+                         self.degree)                                      # (Q, M, K)
         C = self._coefs(nu)
         bad = ~np.all(np.isfinite(Bv), axis=1)
         Bv = np.where(np.isfinite(Bv), Bv, 0.0)
         if nu == 0:
-            out = np.einsum("mk,mkvq,mkq->mv", Bv, C[0][j], mono)
+            out = np.einsum("mk,mkvq,qmk->mv", Bv, C[0][j], mono)
         else:
+            # (M, K, Q) rows: einsum's summation order (its last bits) follows the layout
+            mono = np.ascontiguousarray(np.moveaxis(mono, 0, -1))
             Tv = np.einsum("mkvq,mkq->mkv", C[0][j], mono)
             Tg = np.einsum("mkvlq,mkq->mkvl", C[1][j], mono[..., : C[1].shape[-1]])
             if nu == 1:
