@@ -90,13 +90,22 @@ class ChebyshevMaster:
         # (all cells in one call, column by column: the same arithmetic as one call per
         # cell, 20x faster; a third of the default ERBS's first construction)
         coefs = np.array([c[2] for c in done])                        # (cells, deg+1)
-        self.icoef = (cheb.chebint(coefs.T, lbnd=-1.0, axis=0) * (h / 2)).T   # (cells, deg+2)
+        self.icoef = np.ascontiguousarray((cheb.chebint(coefs.T, lbnd=-1.0, axis=0) * (h / 2)).T)
         cell_int = cheb.chebval(1.0, self.icoef.T).tolist()
         self.Z = math.fsum(cell_int)
         self.left = _neumaier_cumsum(cell_int)
         self.breaks = np.concatenate([self.a, [1.0]])
         self.tail_sum = tail_sum
         self._icoef_t = np.ascontiguousarray(self.icoef.T)
+
+    @classmethod
+    def from_arrays(cls, a, b, icoef, Z, left, breaks, tail_sum):
+        """A master from the arrays of a previous build (:mod:`.erbs_store`)."""
+        self = cls.__new__(cls)
+        self.a, self.b, self.icoef, self.Z, self.left = a, b, icoef, Z, left
+        self.breaks, self.tail_sum = breaks, tail_sum
+        self._icoef_t = np.ascontiguousarray(icoef.T)
+        return self
 
     @property
     def n_cells(self) -> int:
