@@ -15,6 +15,7 @@ from . import covers as _covers
 from .balls import BallCover
 from .candidates import StarCandidates, delaunay_candidates
 from .hermite_data import hermite_data
+from .local_sums import blend_sum
 from .metric_forms import as_metric
 from .metrics import Euclidean
 from .partition import disjoint_basis, general_basis, minimal_basis
@@ -138,6 +139,9 @@ class GERBSInterpolator:
         # T_i as monomial coefficients (gathered per query); those of its derivatives
         # are added on the first call with nu >= 1 (:meth:`_coefs`)
         self._coef = coefficient_tables(D, n, 0)
+        # scalar data: T_i's coefficients also as (Q, N, 1) rows, for the values' sum
+        self._coef_t = (np.ascontiguousarray(self._coef[0].transpose(2, 0, 1))
+                        if self._V == 1 else None)
 
     # ------------------------------------------------------------------
     def _setup_cover(self, cover, basis, metric, rho, R, domain, gauge_kw):
@@ -347,24 +351,12 @@ class GERBSInterpolator:
     def _eval_chunk(self, x, idx, edge, nu):
         idx, Bv, Bg, Bh = self._basis(x, idx, edge, nu)
         j = np.maximum(idx, 0)
-        # offsets x - x_j coordinate-major: contiguous gathers and monomial rows
-        mono = monomials([x[:, c, None] - self._points_t[c][j] for c in range(self.n)],
-                         self.degree)                                      # (Q, M, K)
-        C = self._coefs(nu)
+        jt = np.ascontiguousarray(j.T)
+        # offsets x - x_j coordinate-major (K, M): contiguous gathers and monomial rows
+        mono = monomials([x[:, c] - self._points_t[c][jt] for c in range(self.n)],
+                         self.degree)                                      # (Q, K, M)
         bad = ~np.all(np.isfinite(Bv), axis=1)
         Bv = np.where(np.isfinite(Bv), Bv, 0.0)
-        if nu == 0:
-            out = np.einsum("mk,mkvq,qmk->mv", Bv, C[0][j], mono)
-        else:
-            # (M, K, Q) rows: einsum's summation order (its last bits) follows the layout
-            mono = np.ascontiguousarray(np.moveaxis(mono, 0, -1))
-            Tv = np.einsum("mkvq,mkq->mkv", C[0][j], mono)
-            Tg = np.einsum("mkvlq,mkq->mkvl", C[1][j], mono[..., : C[1].shape[-1]])
-            if nu == 1:
-                out = np.einsum("mki,mkv->mvi", Bg, Tv) + np.einsum("mk,mkvi->mvi", Bv, Tg)
-            else:
-                Th = np.einsum("mkvlrq,mkq->mkvlr", C[2][j], mono[..., : C[2].shape[-1]])
-                out = (np.einsum("mkij,mkv->mvij", Bh, Tv) + np.einsum("mki,mkvj->mvij", Bg, Tg)
-                       + np.einsum("mkj,mkvi->mvij", Bg, Tg) + np.einsum("mk,mkvij->mvij", Bv, Th))
+        out = blend_sum(nu, Bv, Bg, Bh, self._coefs(nu), self._coef_t, j, jt, mono)
         out[bad] = self.fill_value
         return out
