@@ -246,8 +246,11 @@ def overshoot_profile(kernel, n=513, mirrored=False):
         if G is not None:
             return G
     Fhi = np.append(F[1:], 1.0)
-    G = np.max(np.where(w[None, :] <= w[:, None], Fhi[None, :] * (w[:, None] - w[None, :]),
-                        0.0), axis=1)
+    # rows i, columns j: Fhi_j (w_i - w_j) for j <= i, else 0 (there the product is <= 0,
+    # and max(0.0, .) is +0.0 as the masked form's: the same bits, 3x faster)
+    D = np.subtract.outer(w, w)
+    D *= Fhi
+    G = np.maximum(0.0, D, out=D).max(axis=1)
     G.setflags(write=False)
     if len(_G_CACHE) > 32:
         _G_CACHE.clear()

@@ -25,6 +25,10 @@ from .taylor import averaged_taylor, coefficient_tables, estimate_derivatives, m
 
 __all__ = ["GERBSInterpolator"]
 
+# query rows per evaluation step: its ~40 temporaries of (rows, K) stay below glibc's
+# mmap threshold and in cache (each row is computed on its own, so the same bits)
+_CACHE_ROWS = 4096
+
 
 def _default_kernel():
     from ..kernels import ERBS
@@ -339,7 +343,7 @@ class GERBSInterpolator:
             pairs = int(deg[np.maximum(idx, 0)].sum(axis=1).max()) if idx.size else 0
         coefs = sum(c[0, 0].size for c in self._coefs(nu))
         rb = _budget.row_bytes(idx.shape[1], self.n, self._V, nu, coefs, pairs)
-        step = int(max(1, self._work // rb))
+        step = int(max(1, min(self._work // rb, _CACHE_ROWS)))
         if step >= len(x):
             return self._eval_chunk(x, idx, edge, nu)
         out = np.empty((len(x), self._V) + (self.n,) * nu)
