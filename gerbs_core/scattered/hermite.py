@@ -359,8 +359,9 @@ class GERBSInterpolator:
         # offsets x - x_j coordinate-major (K, M): contiguous gathers and monomial rows
         mono = monomials([x[:, c] - self._points_t[c][jt] for c in range(self.n)],
                          self.degree)                                      # (Q, K, M)
-        bad = ~np.all(np.isfinite(Bv), axis=1)
-        Bv = np.where(np.isfinite(Bv), Bv, 0.0)
+        finite = np.isfinite(Bv)
+        bad = ~np.all(finite, axis=1)
+        Bv = np.where(finite, Bv, 0.0)
         out = blend_sum(nu, Bv, Bg, Bh, self._coefs(nu), self._coef_t, j, jt, mono)
         out[bad] = self.fill_value
         return out
