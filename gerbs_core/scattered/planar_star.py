@@ -142,7 +142,7 @@ class PlanarStarCover:
         self.R[e], self.L[f] = wa, wb
         # the amplitude 1 / (shrink c p) of each edge's pulled-in line, once per edge
         self._line_scale = 1.0 / (self.shrink * self.c * self.p)
-        self._sides = self._side_tables() if E <= _TABLE_EDGES else None
+        self._sides = self._side_tables() if E <= _TABLE_EDGES and not self.exact else None
         # rho is convex on each edge: its max is at a corner, and rho~ <= rho
         self.support_radius = np.zeros(len(self.centers))
         np.maximum.at(self.support_radius, self.edge_star, self.shrink * self._corner_r)

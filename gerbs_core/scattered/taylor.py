@@ -152,9 +152,10 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
     if chunk is None:
         rows = K * (1 + (n if known >= 1 else 0))
         per_point = 8 * (rows * (3 * M + 2 * V + 3 * n + 4) + M * (M + V) * 3)
-        # a chunk's working arrays stay cache-sized (~16 MB, ~2000 points in the plane:
-        # measured fastest; 10x larger chunks were 2x slower)
-        chunk = int(max(64, min(N, work_bytes // per_point, 16e6 // per_point)))
+        # a chunk's working arrays stay cache-sized (~8 MB, ~1000 points in the plane:
+        # measured fastest at 4,004 and 10^5 points, 2x larger ones as fast warm but 3 ms
+        # slower on a first call (page faults), 10x larger ones 2x slower)
+        chunk = int(max(64, min(N, work_bytes // per_point, 8e6 // per_point)))
     order = np.array(alphas, dtype=float).sum(1)
     # visit the points in the tree's own order (its leaves' order): neighbouring
     # queries share the tree's paths and the gathered rows (k-NN 25 % faster at 10^5)
