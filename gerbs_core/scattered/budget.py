@@ -13,7 +13,11 @@ import numpy as np
 
 from ..errors import ResourceLimitError
 
-__all__ = ["row_bytes", "call_estimate", "check_budget", "spatial_order"]
+__all__ = ["row_bytes", "rows_per_step", "call_estimate", "check_budget", "spatial_order"]
+
+# query rows per evaluation step at most: its ~40 temporaries of (rows, K) then stay below
+# glibc's mmap threshold (no page faults of fresh mappings) and in cache
+CACHE_ROWS = 4096
 
 
 def row_bytes(K, n, V, nu, coefs, pairs=0):
@@ -27,6 +31,12 @@ def row_bytes(K, n, V, nu, coefs, pairs=0):
     per_cand = 8 * (4 * n + 10 * jet + 3 * taylor + 3 * V * jet) + 32
     per_pair = 8 * ((n + 1) * n + 3 * (n + 1) + 8)
     return int(K * per_cand + pairs * per_pair + 8 * V * jet * 2 + 64)
+
+
+def rows_per_step(work_bytes, row_bytes_):
+    """Query rows per evaluation step: what the working memory holds, at most CACHE_ROWS
+    (rows are computed independently: the split does not change the bits)."""
+    return int(max(1, min(work_bytes // row_bytes_, CACHE_ROWS)))
 
 
 def call_estimate(M, n, V, nu, work_bytes):

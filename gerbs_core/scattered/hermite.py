@@ -15,19 +15,15 @@ from . import covers as _covers
 from .balls import BallCover
 from .candidates import StarCandidates, delaunay_candidates
 from .hermite_data import hermite_data
-from .local_sums import blend_sum
+from .local_sums import interpolant_sum
 from .metric_forms import as_metric
 from .metrics import Euclidean
 from .partition import disjoint_basis, general_basis, minimal_basis
 from .radii import check_points, nearest_distances
 from .star_nd import DelaunayStarCover
-from .taylor import averaged_taylor, coefficient_tables, estimate_derivatives, monomials
+from .taylor import averaged_taylor, coefficient_tables, estimate_derivatives
 
 __all__ = ["GERBSInterpolator"]
-
-# query rows per evaluation step: its ~40 temporaries of (rows, K) stay below glibc's
-# mmap threshold and in cache (each row is computed on its own, so the same bits)
-_CACHE_ROWS = 4096
 
 
 def _default_kernel():
@@ -343,7 +339,7 @@ class GERBSInterpolator:
             pairs = int(deg[np.maximum(idx, 0)].sum(axis=1).max()) if idx.size else 0
         coefs = sum(c[0, 0].size for c in self._coefs(nu))
         rb = _budget.row_bytes(idx.shape[1], self.n, self._V, nu, coefs, pairs)
-        step = int(max(1, min(self._work // rb, _CACHE_ROWS)))
+        step = _budget.rows_per_step(self._work, rb)
         if step >= len(x):
             return self._eval_chunk(x, idx, edge, nu)
         out = np.empty((len(x), self._V) + (self.n,) * nu)
@@ -354,14 +350,7 @@ class GERBSInterpolator:
 
     def _eval_chunk(self, x, idx, edge, nu):
         idx, Bv, Bg, Bh = self._basis(x, idx, edge, nu)
-        j = np.maximum(idx, 0)
-        jt = np.ascontiguousarray(j.T)
-        # offsets x - x_j coordinate-major (K, M): contiguous gathers and monomial rows
-        mono = monomials([x[:, c] - self._points_t[c][jt] for c in range(self.n)],
-                         self.degree)                                      # (Q, K, M)
-        finite = np.isfinite(Bv)
-        bad = ~np.all(finite, axis=1)
-        Bv = np.where(finite, Bv, 0.0)
-        out = blend_sum(nu, Bv, Bg, Bh, self._coefs(nu), self._coef_t, j, jt, mono)
+        out, bad = interpolant_sum(nu, x, self._points_t, idx, Bv, Bg, Bh, self._coefs(nu),
+                                   self._coef_t, self.degree)
         out[bad] = self.fill_value
         return out

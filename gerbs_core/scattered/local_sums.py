@@ -3,13 +3,29 @@ local Taylor polynomials' monomial coefficients (:func:`~.taylor.coefficient_tab
 
 One query chunk: B (M, K) (and gradient / Hessian), the candidates' point indices
 j (M, K), and the monomials of the offsets x - x_j as (Q, K, M) rows
-(:func:`~.taylor.monomials` of the (K, M) coordinate arrays).
+(:func:`monomials` of the (K, M) coordinate arrays), in the order of
+:func:`~.taylor.multi_indices` (that of :func:`~.taylor.coefficient_tables`).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["blend_sum"]
+__all__ = ["interpolant_sum", "blend_sum", "monomials"]
+
+
+def interpolant_sum(nu, x, points_t, idx, Bv, Bg, Bh, C, CT, degree):
+    """(sum_k B_k T_k (or its derivatives, :func:`blend_sum`), rows (M,) where some B is
+    not finite: outside the domain) at x (M, n), candidates idx (M, K) (-1 empty), the
+    points coordinate-major points_t (n, N), T_i of ``degree``."""
+    j = np.maximum(idx, 0)
+    jt = np.ascontiguousarray(j.T)
+    # offsets x - x_j coordinate-major (K, M): contiguous gathers and monomial rows
+    mono = monomials([x[:, c] - points_t[c][jt] for c in range(len(points_t))], degree)
+    finite = np.isfinite(Bv)
+    bad = ~np.all(finite, axis=1)
+    return blend_sum(nu, np.where(finite, Bv, 0.0), Bg, Bh, C, CT, j, jt, mono), bad
 
 
 def blend_sum(nu, Bv, Bg, Bh, C, CT, j, jt, mono):
@@ -51,3 +67,32 @@ def _values_scalar(Bv, CT, jt, mono):
             tmp *= mono[q, k][:, None]
             acc += tmp
     return acc
+
+
+def monomials(d, m):
+    """d^alpha for the multi-indices of :func:`multi_indices` (n, 0, m), graded (so the
+    first entries are the monomials of every lower degree), coordinate-major: d is a
+    sequence of the n coordinate arrays (each of one shape S), the result (Q, *S).
+
+    Each monomial is one product of a lower one and a coordinate, written in place into
+    its contiguous row (a (..., Q) stack of the rows costs 4x the products)."""
+    n = len(d)
+    shape = np.shape(d[0])
+    out = np.empty((math.comb(n + m, m),) + shape)
+    out[0] = 1.0
+    # degree k monomials as products of a degree k-1 monomial and one coordinate:
+    # combinations_with_replacement order, built incrementally
+    prev, q = [((), None)], 1
+    for _ in range(m):
+        cur = []
+        for combo, src in prev:
+            start = combo[-1] if combo else 0
+            for c in range(start, n):
+                if src is None:
+                    out[q] = d[c]              # (1 * d_c, exactly)
+                else:
+                    np.multiply(out[src], d[c], out=out[q])
+                cur.append((combo + (c,), q))
+                q += 1
+        prev = cur
+    return out

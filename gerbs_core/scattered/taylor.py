@@ -32,7 +32,7 @@ from scipy.spatial import cKDTree
 from ..errors import InvalidParameterError, InvalidPointSetError
 
 __all__ = ["multi_indices", "taylor_jet", "estimate_derivatives", "averaged_taylor", "tensors_from_coeffs",
-           "monomials", "coefficient_tables"]
+           "coefficient_tables"]
 
 
 def multi_indices(n, kmin, kmax):
@@ -289,42 +289,14 @@ def averaged_taylor(func_jet, centers, radii, degree, n_quad=8):
     return out
 
 
-def monomials(d, m):
-    """d^alpha for the multi-indices of :func:`multi_indices` (n, 0, m), graded (so the
-    first entries are the monomials of every lower degree), coordinate-major: d is a
-    sequence of the n coordinate arrays (each of one shape S), the result (Q, *S).
-
-    Each monomial is one product of a lower one and a coordinate, written in place into
-    its contiguous row (a (..., Q) stack of the rows costs 4x the products)."""
-    n = len(d)
-    shape = np.shape(d[0])
-    out = np.empty((math.comb(n + m, m),) + shape)
-    out[0] = 1.0
-    # degree k monomials as products of a degree k-1 monomial and one coordinate:
-    # combinations_with_replacement order, built incrementally
-    prev, q = [((), None)], 1
-    for _ in range(m):
-        cur = []
-        for combo, src in prev:
-            start = combo[-1] if combo else 0
-            for c in range(start, n):
-                if src is None:
-                    out[q] = d[c]              # (1 * d_c, exactly)
-                else:
-                    np.multiply(out[src], d[c], out=out[q])
-                cur.append((combo + (c,), q))
-                q += 1
-        prev = cur
-    return out
-
-
 def coefficient_tables(D, n, nu):
     """Monomial coefficients of T_i and of its first and second derivatives.
 
     D = [D0 (N, V), D1 (N, V, n), ..., Dm (N, V, n^m)] (symmetric derivative tensors).
     Returns [C0 (N, V, Q_m), C1 (N, V, n, Q_{m-1}), C2 (N, V, n, n, Q_{m-2})][: nu + 1]
     with T_i(x) = C0 . d^alpha, d_l T_i = C1[:, :, l] . d^beta, d_l d_k T_i =
-    C2[:, :, l, k] . d^gamma (d = x - x_i, monomials as in :func:`monomials`).
+    C2[:, :, l, k] . d^gamma (d = x - x_i, monomials as in
+    :func:`gerbs_core.scattered.local_sums.monomials`).
     Exact: C_alpha = D^alpha f(x_i) / alpha!.
     """
     m = len(D) - 1
