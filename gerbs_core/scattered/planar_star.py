@@ -182,6 +182,7 @@ class PlanarStarCover:
         np.take(ls, fs, out=sB[0])
         np.take(m, fs, out=mB[0])
         np.add(R, np.take(L, fs, out=width[0]), out=width[0])
+        width[0][f < 0] = 1.0     # (an open star's end: only its middle, width 1 as there)
         np.add(np.take(R, gs, out=w2[1]), L, out=width[1])
         self._thr_left = np.where(g >= 0, L, -np.inf)
         self._thr_right = np.where(f >= 0, d - R, np.inf)
