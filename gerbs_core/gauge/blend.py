@@ -45,31 +45,44 @@ def adaptive_scales(n_edges, ea, eb, nA, pA, nB, pB, roomA, roomB, kappa, kernel
     wishes: halfway. Only the quality depends on this choice; the widths are
     then certified for it (:func:`fit_blend_widths`).
     """
+    G, GB = overshoot_profile(kernel), overshoot_profile(kernel, mirrored=True)
+    hi = np.ones(n_edges)
+    lo = np.full(n_edges, kappa)
+    # corners in chunks: the ~30 temporaries of a chunk stay in cache (2x at 6e5 corners);
+    # min / max are exact, so the per-edge results do not depend on the chunking
+    for s in range(0, len(nA), _SCALE_CHUNK):
+        k = slice(s, s + _SCALE_CHUNK)
+        cvx, up, rfx, dn = _corner_wishes(nA[k], pA[k], nB[k], pB[k], roomA[k], roomB[k],
+                                          kappa, G, GB)
+        for e in (ea[k], eb[k]):
+            np.minimum.at(hi, e[cvx], up[cvx])
+            np.maximum.at(lo, e[rfx], dn[rfx])
+    return np.where(lo <= hi, hi, 0.5 * (lo + hi))
+
+
+_SCALE_CHUNK = 1 << 16
+
+
+def _corner_wishes(nA, pA, nB, pB, roomA, roomB, kappa, G, GB):
+    """Per corner of :func:`adaptive_scales`: (convex mask, its upper bound of c, reflex
+    mask, its lower bound of c)."""
     tau = np.abs(nB - nA)
     convex = (nB - nA) > 0
     straight = tau <= 1e-12
     W = roomA + roomB
     al = roomA / W
-    G, GB = overshoot_profile(kernel), overshoot_profile(kernel, mirrored=True)
     n = len(G) - 1
-    gA = G[np.clip(np.ceil(al * n).astype(int), 0, n)]
-    gB = GB[np.clip(np.ceil((1.0 - al) * n).astype(int), 0, n)]
+    gA = G[_grid_index(al, n)]
+    gB = GB[_grid_index(1.0 - al, n)]
     eA = np.minimum(np.cos(-roomA - nA) ** 2, np.cos(nA) ** 2)
     eB = np.minimum(np.cos(roomB - nB) ** 2, np.cos(nB) ** 2)
     with np.errstate(divide="ignore", invalid="ignore"):
-        need = np.fmax(W * (pA / pB) * np.sin(tau) * gA / eA,
-                       W * (pB / pA) * np.sin(tau) * gB / eB)
+        st = np.sin(tau)
+        need = np.fmax(W * (pA / pB) * st * gA / eA, W * (pB / pA) * st * gB / eB)
     need = np.where(np.isfinite(need), need, np.inf)
-    hi = np.ones(n_edges)
-    lo = np.full(n_edges, kappa)
-    cvx = convex & ~straight
-    rfx = ~convex & ~straight
     up = np.clip(1.0 - 1.2 * need, max(kappa, CONVEX_SCALE), _C_MAX)
     dn = np.clip(kappa * (1.0 + 1.2 * need), kappa, 1.0)
-    for e in (ea, eb):
-        np.minimum.at(hi, e[cvx], up[cvx])
-        np.maximum.at(lo, e[rfx], dn[rfx])
-    return np.where(lo <= hi, hi, 0.5 * (lo + hi))
+    return convex & ~straight, up, ~convex & ~straight, dn
 
 
 def blend_check(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, samples=_BLEND_SAMPLES,
@@ -159,23 +172,34 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
     a, b = roomA.astype(float).copy(), roomB.astype(float).copy()
     ok = same.copy()
     t = np.flatnonzero(~same)
+    # the factors that do not change with the widths, once per corner (the same
+    # operations as inside the loop, so the same bits): half of the cosines
+    rAB, rBA = pA / pB, pB / pA
+    cA2, cB2 = np.cos(nA) ** 2, np.cos(nB) ** 2
     for _ in range(iters):
         if not t.size:
             break
-        W = a[t] + b[t]
-        al = a[t] / W
-        gA = G[np.clip(np.ceil(al * n).astype(int), 0, n)]
-        gB = GB[np.clip(np.ceil((1.0 - al) * n).astype(int), 0, n)]
-        eA = np.minimum(np.cos(-a[t] - nA[t]) ** 2, np.cos(nA[t]) ** 2)
-        eB = np.minimum(np.cos(b[t] - nB[t]) ** 2, np.cos(nB[t]) ** 2)
-        okA = W * (pA[t] / pB[t]) * st[t] * gA <= allowA[t] * eA * (1 - 1e-9)
-        okB = W * (pB[t] / pA[t]) * st[t] * gB <= allowB[t] * eB * (1 - 1e-9)
+        at, bt = a[t], b[t]
+        W = at + bt
+        al = at / W
+        gA = G[_grid_index(al, n)]
+        gB = GB[_grid_index(1.0 - al, n)]
+        eA = np.minimum(np.cos(-at - nA[t]) ** 2, cA2[t])
+        eB = np.minimum(np.cos(bt - nB[t]) ** 2, cB2[t])
+        stt = st[t]
+        okA = W * rAB[t] * stt * gA <= allowA[t] * eA * (1 - 1e-9)
+        okB = W * rBA[t] * stt * gB <= allowB[t] * eB * (1 - 1e-9)
         good = okA & okB
         ok[t[good]] = True
-        a[t[~okA]] *= factor
-        b[t[~okB]] *= factor
+        a[t] = np.where(okA, at, at * factor)      # (one scatter per side, same values)
+        b[t] = np.where(okB, bt, bt * factor)
         t = t[~good]
     return a, b, ok
+
+
+def _grid_index(al, n):
+    """ceil(al n) clipped to [0, n] (as np.clip, without its Python-level wrapper)."""
+    return np.minimum(np.maximum(np.ceil(al * n).astype(int), 0), n)
 
 
 def fit_blend_widths(nA, pA, cA, nB, pB, cB, a, b, kappa, kernel, factor=_BLEND_SHRINK):
@@ -222,8 +246,11 @@ def overshoot_profile(kernel, n=513, mirrored=False):
         if G is not None:
             return G
     Fhi = np.append(F[1:], 1.0)
-    G = np.max(np.where(w[None, :] <= w[:, None], Fhi[None, :] * (w[:, None] - w[None, :]),
-                        0.0), axis=1)
+    # rows i, columns j: Fhi_j (w_i - w_j) for j <= i, else 0 (there the product is <= 0,
+    # and max(0.0, .) is +0.0 as the masked form's: the same bits, 3x faster)
+    D = np.subtract.outer(w, w)
+    D *= Fhi
+    G = np.maximum(0.0, D, out=D).max(axis=1)
     G.setflags(write=False)
     if len(_G_CACHE) > 32:
         _G_CACHE.clear()

@@ -87,14 +87,25 @@ class ChebyshevMaster:
         self.b = np.array([c[1] for c in done])
         h = self.b - self.a
         # integral of the interpolant from the cell's left end, in the cell variable
-        self.icoef = np.array([cheb.chebint(c[2], lbnd=-1.0) * (hk / 2)
-                               for c, hk in zip(done, h)])     # (cells, deg+2)
-        cell_int = [float(cheb.chebval(1.0, ic)) for ic in self.icoef]
+        # (all cells in one call, column by column: the same arithmetic as one call per
+        # cell, 20x faster; a third of the default ERBS's first construction)
+        coefs = np.array([c[2] for c in done])                        # (cells, deg+1)
+        self.icoef = np.ascontiguousarray((cheb.chebint(coefs.T, lbnd=-1.0, axis=0) * (h / 2)).T)
+        cell_int = cheb.chebval(1.0, self.icoef.T).tolist()
         self.Z = math.fsum(cell_int)
         self.left = _neumaier_cumsum(cell_int)
         self.breaks = np.concatenate([self.a, [1.0]])
         self.tail_sum = tail_sum
         self._icoef_t = np.ascontiguousarray(self.icoef.T)
+
+    @classmethod
+    def from_arrays(cls, a, b, icoef, Z, left, breaks, tail_sum):
+        """A master from the arrays of a previous build (:mod:`.erbs_store`)."""
+        self = cls.__new__(cls)
+        self.a, self.b, self.icoef, self.Z, self.left = a, b, icoef, Z, left
+        self.breaks, self.tail_sum = breaks, tail_sum
+        self._icoef_t = np.ascontiguousarray(icoef.T)
+        return self
 
     @property
     def n_cells(self) -> int:

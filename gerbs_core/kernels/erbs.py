@@ -40,10 +40,12 @@ from __future__ import annotations
 
 import math
 import numbers
+from functools import lru_cache
 
 import numpy as np
 
 from ..errors import InvalidParameterError
+from . import erbs_store
 from ._series import exp_series
 from ._table import CHUNK
 from .base import Kernel, check_order
@@ -246,4 +248,11 @@ class ERBS(Kernel):
 
 def _tables(k: ERBS):
     """(master, fast table, clip interval or None, log scale) of k's parameter set."""
-    return build_tables(ERBS, k._params())
+    params = k._params()
+    return _default_tables() if params == erbs_store.DEFAULT else build_tables(ERBS, params)
+
+
+@lru_cache(maxsize=1)
+def _default_tables():
+    """ERBS()'s tables: stored with the package (:mod:`.erbs_store`), else built."""
+    return erbs_store.load() or build_tables(ERBS, erbs_store.DEFAULT)

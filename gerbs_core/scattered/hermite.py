@@ -15,12 +15,13 @@ from . import covers as _covers
 from .balls import BallCover
 from .candidates import StarCandidates, delaunay_candidates
 from .hermite_data import hermite_data
+from .local_sums import interpolant_sum
 from .metric_forms import as_metric
 from .metrics import Euclidean
 from .partition import disjoint_basis, general_basis, minimal_basis
 from .radii import check_points, nearest_distances
 from .star_nd import DelaunayStarCover
-from .taylor import averaged_taylor, coefficient_tables, estimate_derivatives, monomials
+from .taylor import averaged_taylor, coefficient_tables, estimate_derivatives
 
 __all__ = ["GERBSInterpolator"]
 
@@ -102,6 +103,7 @@ class GERBSInterpolator:
         tree = cKDTree(pts) if tree is None else tree     # the one tree of the points
         N, n = pts.shape
         self.points, self.n, self._tree = pts, n, tree
+        self._points_t = np.ascontiguousarray(pts.T)     # coordinate-major, for gathers
         self.kernel = _default_kernel() if kernel is None else kernel
         self.fill_value = fill_value
         self.chunk_size = int(chunk_size)
@@ -137,6 +139,9 @@ class GERBSInterpolator:
         # T_i as monomial coefficients (gathered per query); those of its derivatives
         # are added on the first call with nu >= 1 (:meth:`_coefs`)
         self._coef = coefficient_tables(D, n, 0)
+        # scalar data: T_i's coefficients also as (Q, N, 1) rows, for the values' sum
+        self._coef_t = (np.ascontiguousarray(self._coef[0].transpose(2, 0, 1))
+                        if self._V == 1 else None)
 
     # ------------------------------------------------------------------
     def _setup_cover(self, cover, basis, metric, rho, R, domain, gauge_kw):
@@ -334,7 +339,7 @@ class GERBSInterpolator:
             pairs = int(deg[np.maximum(idx, 0)].sum(axis=1).max()) if idx.size else 0
         coefs = sum(c[0, 0].size for c in self._coefs(nu))
         rb = _budget.row_bytes(idx.shape[1], self.n, self._V, nu, coefs, pairs)
-        step = int(max(1, self._work // rb))
+        step = _budget.rows_per_step(self._work, rb)
         if step >= len(x):
             return self._eval_chunk(x, idx, edge, nu)
         out = np.empty((len(x), self._V) + (self.n,) * nu)
@@ -345,21 +350,7 @@ class GERBSInterpolator:
 
     def _eval_chunk(self, x, idx, edge, nu):
         idx, Bv, Bg, Bh = self._basis(x, idx, edge, nu)
-        j = np.maximum(idx, 0)
-        mono = monomials(x[:, None, :] - self.points[j], self.degree)     # (M, K, Q)
-        C = self._coefs(nu)
-        bad = ~np.all(np.isfinite(Bv), axis=1)
-        Bv = np.where(np.isfinite(Bv), Bv, 0.0)
-        if nu == 0:
-            out = np.einsum("mk,mkvq,mkq->mv", Bv, C[0][j], mono)
-        else:
-            Tv = np.einsum("mkvq,mkq->mkv", C[0][j], mono)
-            Tg = np.einsum("mkvlq,mkq->mkvl", C[1][j], mono[..., : C[1].shape[-1]])
-            if nu == 1:
-                out = np.einsum("mki,mkv->mvi", Bg, Tv) + np.einsum("mk,mkvi->mvi", Bv, Tg)
-            else:
-                Th = np.einsum("mkvlrq,mkq->mkvlr", C[2][j], mono[..., : C[2].shape[-1]])
-                out = (np.einsum("mkij,mkv->mvij", Bh, Tv) + np.einsum("mki,mkvj->mvij", Bg, Tg)
-                       + np.einsum("mkj,mkvi->mvij", Bg, Tg) + np.einsum("mk,mkvij->mvij", Bv, Th))
+        out, bad = interpolant_sum(nu, x, self._points_t, idx, Bv, Bg, Bh, self._coefs(nu),
+                                   self._coef_t, self.degree)
         out[bad] = self.fill_value
         return out

@@ -32,7 +32,7 @@ from scipy.spatial import cKDTree
 from ..errors import InvalidParameterError, InvalidPointSetError
 
 __all__ = ["multi_indices", "taylor_jet", "estimate_derivatives", "averaged_taylor", "tensors_from_coeffs",
-           "monomials", "coefficient_tables"]
+           "coefficient_tables"]
 
 
 def multi_indices(n, kmin, kmax):
@@ -152,9 +152,10 @@ def estimate_derivatives(points, D_known, fit_degree, n_neighbors=None, tree=Non
     if chunk is None:
         rows = K * (1 + (n if known >= 1 else 0))
         per_point = 8 * (rows * (3 * M + 2 * V + 3 * n + 4) + M * (M + V) * 3)
-        # a chunk's working arrays stay cache-sized (~16 MB, ~2000 points in the plane:
-        # measured fastest; 10x larger chunks were 2x slower)
-        chunk = int(max(64, min(N, work_bytes // per_point, 16e6 // per_point)))
+        # a chunk's working arrays stay cache-sized (~8 MB, ~1000 points in the plane:
+        # measured fastest at 4,004 and 10^5 points, 2x larger ones as fast warm but 3 ms
+        # slower on a first call (page faults), 10x larger ones 2x slower)
+        chunk = int(max(64, min(N, work_bytes // per_point, 8e6 // per_point)))
     order = np.array(alphas, dtype=float).sum(1)
     # visit the points in the tree's own order (its leaves' order): neighbouring
     # queries share the tree's paths and the gathered rows (k-NN 25 % faster at 10^5)
@@ -288,32 +289,14 @@ def averaged_taylor(func_jet, centers, radii, degree, n_quad=8):
     return out
 
 
-def monomials(d, m):
-    """d^alpha for the multi-indices of :func:`multi_indices` (n, 0, m), graded (so the
-    first entries are the monomials of every lower degree): (..., Q)."""
-    n = d.shape[-1]
-    out = [np.ones(d.shape[:-1])]
-    # degree k monomials as products of a degree k-1 monomial and one coordinate:
-    # combinations_with_replacement order, built incrementally
-    prev = [((), out[0])]
-    for _ in range(m):
-        cur = []
-        for combo, val in prev:
-            start = combo[-1] if combo else 0
-            for c in range(start, n):
-                cur.append((combo + (c,), val * d[..., c]))
-        out.extend(v for _, v in cur)
-        prev = cur
-    return np.stack(out, axis=-1)
-
-
 def coefficient_tables(D, n, nu):
     """Monomial coefficients of T_i and of its first and second derivatives.
 
     D = [D0 (N, V), D1 (N, V, n), ..., Dm (N, V, n^m)] (symmetric derivative tensors).
     Returns [C0 (N, V, Q_m), C1 (N, V, n, Q_{m-1}), C2 (N, V, n, n, Q_{m-2})][: nu + 1]
     with T_i(x) = C0 . d^alpha, d_l T_i = C1[:, :, l] . d^beta, d_l d_k T_i =
-    C2[:, :, l, k] . d^gamma (d = x - x_i, monomials as in :func:`monomials`).
+    C2[:, :, l, k] . d^gamma (d = x - x_i, monomials as in
+    :func:`gerbs_core.scattered.local_sums.monomials`).
     Exact: C_alpha = D^alpha f(x_i) / alpha!.
     """
     m = len(D) - 1

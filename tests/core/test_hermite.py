@@ -232,3 +232,22 @@ def test_ball_covers_in_every_metric(metric):
     if nu_max < 2:
         with pytest.raises(Exception, match="nu"):
             interp(P, nu_max + 1)
+
+
+def test_scalar_values_sum_is_einsums_bit_for_bit():
+    """local_sums' term-by-term values sum (V = 1) equals the einsum it replaces to the
+    last bit, for several candidate counts K, monomial counts Q and chunk sizes, with
+    zero weights (empty slots) and coefficients / monomials over 16 decades."""
+    from gerbs_core.scattered.local_sums import _values_scalar
+    rng = np.random.default_rng(5)
+    for N, M, K, Q in [(50, 1, 3, 10), (4004, 20000, 3, 10), (300, 5000, 20, 6), (300, 4099, 5, 3),
+                       (10, 3, 1, 1)]:
+        C0 = rng.normal(size=(N, 1, Q)) * 10.0 ** rng.integers(-8, 8, (N, 1, Q))
+        j = rng.integers(0, N, (M, K))
+        Bv = rng.random((M, K))
+        Bv[rng.random((M, K)) < 0.3] = 0.0
+        mono = rng.normal(size=(Q, K, M)) * 10.0 ** rng.integers(-5, 5, (Q, K, M))
+        ref = np.einsum("mk,mkvq,mkq->mv", Bv, C0[j], np.ascontiguousarray(mono.transpose(2, 1, 0)))
+        got = _values_scalar(Bv, np.ascontiguousarray(C0.transpose(2, 0, 1)),
+                             np.ascontiguousarray(j.T), mono)
+        np.testing.assert_array_equal(got, ref)

@@ -231,3 +231,30 @@ def test_immutable_and_value_semantics():
     assert ERBS() == ERBS(1, 1, 1, 0.5, 1) and hash(ERBS()) == hash(ERBS(1, 1, 1, 0.5, 1))
     assert ERBS(lam=0.3) != ERBS()
     assert "lam=0.3" in repr(ERBS(lam=0.3))
+
+
+def test_stored_default_tables_are_the_build_bit_for_bit(tmp_path):
+    """ERBS() loads its tables from the package (kernels.erbs_store): every array and
+    number equals a fresh build's exactly (a stale file fails here), and a missing or
+    foreign file falls back to the build."""
+    from gerbs_core.kernels import erbs_store
+    from gerbs_core.kernels.erbs import _default_tables
+    from gerbs_core.kernels.erbs_table import build_tables
+    import os
+    stored = erbs_store.load()
+    assert stored is not None, "gerbs_core/kernels/erbs_default.npy missing: erbs_store.regenerate()"
+    if os.environ.get("OPENBLAS_NUM_THREADS") != "1":
+        pytest.skip("the build is bit-reproducible with OPENBLAS_NUM_THREADS=1 (erbs_store.regenerate)")
+    built = build_tables.__wrapped__(ERBS, erbs_store.DEFAULT)
+    np.testing.assert_array_equal(erbs_store.pack(stored), erbs_store.pack(built))
+    (m1, t1, c1, s1), (m2, t2, c2, s2) = stored, built
+    for name in ("a", "b", "icoef", "left", "breaks", "_icoef_t"):
+        np.testing.assert_array_equal(getattr(m1, name), getattr(m2, name))
+    assert (m1.Z, m1.tail_sum, c1, s1) == (m2.Z, m2.tail_sum, c2, s2)
+    assert (t1.M, t1.uniform, t1.deg) == (t2.M, t2.uniform, t2.deg)
+    for x, y in zip(t1.coef + [t1.breaks, t1.inv_h], t2.coef + [t2.breaks, t2.inv_h]):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(erbs_store.pack(_default_tables()), erbs_store.pack(built))
+    assert erbs_store.load(tmp_path / "missing.npy") is None
+    np.save(tmp_path / "foreign.npy", np.arange(20.0))
+    assert erbs_store.load(tmp_path / "foreign.npy") is None
