@@ -13,7 +13,10 @@ builds alternate (one of each per round), so both see the same machine load.
     OPENBLAS_NUM_THREADS=1 .venv/bin/python scripts/bench_surface.py [--repeats 5] [--tables]
 
 Every build is from scratch (the core keeps no process-wide cache). --tables also
-prints the Franke F1 convergence table (N = 100 ... 6400).
+prints the Franke F1 convergence table (N = 100 ... 6400). --scaling prints the build's
+CPU time over quad grids 32x32, 64x64, 128x128 at r = 8 (minimum of repeats) and the
+vertex-count exponent (the least-squares slope of log time against log vertices; issue 15
+asks <= 1.05).
 """
 from __future__ import annotations
 
@@ -149,12 +152,36 @@ def franke_table():
         prev = (N, h, a, b)
 
 
+def scaling(repeats, sides=(32, 64, 128), r=8):
+    """Build CPU seconds (BlendingSurface + stencil, minimum of ``repeats``) over quad grids
+    and the exponent of the vertex count."""
+    nv, ts = [], []
+    for n in sides:
+        V, F = P.grid(n, n)
+        best = np.inf
+        for _ in range(repeats):
+            t = time.process_time()
+            BlendingSurface(V, F).stencil(r)
+            best = min(best, time.process_time() - t)
+        nv.append(len(V))
+        ts.append(best)
+        print(f"grid {n}x{n} ({len(V)} vertices) r = {r}: build {best:.3f} CPU s", flush=True)
+    slope = np.polyfit(np.log(nv), np.log(ts), 1)[0]
+    print(f"vertex-count exponent of the build: {slope:.2f} (issue 15: <= 1.05)")
+    return slope
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--tables", action="store_true")
     ap.add_argument("--quick", action="store_true", help="Suzanne at level 2 only (a smoke run)")
+    ap.add_argument("--scaling", action="store_true",
+                    help="only the build's CPU time over grids 32-128 and its exponent")
     args = ap.parse_args()
+    if args.scaling:
+        scaling(max(1, min(args.repeats, 3)))
+        return
     try:
         import bpy  # noqa: F401
     except ImportError:
