@@ -15,6 +15,8 @@ breaks and coefficients. (One .npy: an .npz costs 6 ms of zipfile on first use.)
 """
 from __future__ import annotations
 
+import zlib
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -25,25 +27,41 @@ __all__ = ["DEFAULT", "PATH", "load", "save", "pack", "unpack", "regenerate"]
 
 DEFAULT = (1.0, 1.0, 1.0, 0.5, 1.0)     # ERBS() : (alpha, beta, gamma, lam, sigma)
 PATH = Path(__file__).with_name("erbs_default.npy")
-_VERSION = 1.0
-_HEAD = 12
+_VERSION = 2.0
+_HEAD = 17
+_BUILDER = ("erbs.py", "erbs_table.py", "_table.py", "_series.py")   # what the build runs
 
 
-def pack(tables) -> np.ndarray:
-    """(master, table, clip, shift) -> the flat array of the module docstring."""
+@lru_cache(maxsize=1)
+def fingerprint() -> float:
+    """CRC-32 of the builder's source files (:data:`_BUILDER`), as a float (exact)."""
+    here = Path(__file__).parent
+    crc = 0
+    for name in _BUILDER:
+        crc = zlib.crc32((here / name).read_bytes(), crc)
+    return float(crc)
+
+
+def pack(tables, params=DEFAULT) -> np.ndarray:
+    """(master, table, clip, shift) built for ``params`` (alpha, beta, gamma, lam, sigma)
+    -> the flat array of the module docstring."""
     master, table, clip, shift = tables
     coef = np.array(table.coef)
     lo, hi = (np.nan, np.nan) if clip is None else clip
     head = [_VERSION, master.a.size, master.icoef.shape[1], table.breaks.size, coef.shape[0],
-            float(table.uniform), master.Z, master.tail_sum, shift, lo, hi, 0.0]
+            float(table.uniform), master.Z, master.tail_sum, shift, lo, hi, fingerprint(),
+            *(float(p) for p in params)]
     return np.concatenate([np.array(head, float), master.a, master.b, master.icoef.ravel(),
                            master.left, master.breaks, table.breaks, coef.ravel()])
 
 
 def unpack(flat: np.ndarray):
-    """The flat array -> (master, table, clip, shift); ValueError if the layout differs."""
-    if flat.ndim != 1 or flat.size < _HEAD or flat[0] != _VERSION:
+    """The flat array -> (master, table, clip, shift); ValueError if the layout, the
+    parameters or the builder's fingerprint differ."""
+    if flat.dtype != np.float64 or flat.ndim != 1 or flat.size < _HEAD or flat[0] != _VERSION:
         raise ValueError("not a stored ERBS table of this layout")
+    if flat[11] != fingerprint() or tuple(flat[12:_HEAD]) != DEFAULT:
+        raise ValueError("stored ERBS table: made for other parameters or by other code")
     n, k, m, d = (int(v) for v in flat[1:5])
     sizes = [n, n, n * k, n, n + 1, m, d * m]
     if flat.size != _HEAD + sum(sizes):
@@ -58,15 +76,17 @@ def unpack(flat: np.ndarray):
 
 
 def load(path=PATH):
-    """The stored default tables, or None (missing, unreadable or another layout)."""
+    """The stored default tables, or None (missing, unreadable, empty, another layout,
+    other parameters or another builder)."""
     try:
         return unpack(np.load(path, allow_pickle=False))
-    except (OSError, ValueError):
+    except (OSError, ValueError, EOFError):
         return None
 
 
-def save(tables, path=PATH) -> None:
-    np.save(path, pack(tables), allow_pickle=False)
+def save(tables, params=DEFAULT, path=PATH) -> None:
+    """Write ``tables`` built for ``params`` (only the default's are ever loaded)."""
+    np.save(path, pack(tables, params), allow_pickle=False)
 
 
 def regenerate(path=PATH) -> None:
@@ -81,4 +101,4 @@ def regenerate(path=PATH) -> None:
         raise RuntimeError("regenerate the stored ERBS tables with OPENBLAS_NUM_THREADS=1")
     from .erbs import ERBS
     from .erbs_table import build_tables
-    save(build_tables.__wrapped__(ERBS, DEFAULT), path)
+    save(build_tables.__wrapped__(ERBS, DEFAULT), DEFAULT, path)

@@ -258,3 +258,27 @@ def test_stored_default_tables_are_the_build_bit_for_bit(tmp_path):
     assert erbs_store.load(tmp_path / "missing.npy") is None
     np.save(tmp_path / "foreign.npy", np.arange(20.0))
     assert erbs_store.load(tmp_path / "foreign.npy") is None
+
+
+def test_stored_tables_are_refused_unless_made_for_the_default_by_this_code(tmp_path,
+                                                                           monkeypatch):
+    """The store is used only for the tables this code would build for ERBS(): a file of
+    the right layout made for other parameters, by another version of the builder (its
+    source fingerprint), of another dtype, or empty, is refused (None: the caller builds)."""
+    from gerbs_core.kernels import erbs_store
+    from gerbs_core.kernels.erbs_table import build_tables
+    tables = erbs_store.load()
+    ok = tmp_path / "ok.npy"
+    erbs_store.save(tables, erbs_store.DEFAULT, ok)
+    assert erbs_store.load(ok) is not None                     # the control
+    other = tmp_path / "other.npy"
+    params = (1.0, 1.0, 1.0, 0.3, 1.0)
+    erbs_store.save(build_tables.__wrapped__(ERBS, params), params, other)
+    assert erbs_store.load(other) is None
+    np.save(tmp_path / "ints.npy", erbs_store.pack(tables).astype(np.int64))
+    assert erbs_store.load(tmp_path / "ints.npy") is None
+    (tmp_path / "empty.npy").write_bytes(b"")
+    assert erbs_store.load(tmp_path / "empty.npy") is None
+    # an edit of the builder's code makes the stored file stale
+    monkeypatch.setattr(erbs_store, "fingerprint", lambda: 12345.0)
+    assert erbs_store.load(ok) is None
