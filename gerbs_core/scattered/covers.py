@@ -30,7 +30,16 @@ __all__ = ["PlanarStarCover", "delaunay_cover", "voronoi_cover", "polygon_cover"
 def padded_ball_query(tree, x, r, p=2.0, k0=16):
     """Indices of all tree points within distance r of each x, as a padded (M, K)
     int array (-1 = empty slot), via k-NN queries (vectorized), doubling K for rows
-    that come back full."""
+    that come back full. Rows of x with a NaN or infinite coordinate have no points (the
+    KD-tree refuses them; the evaluation then gives them its fill value)."""
+    finite = np.isfinite(x).all(axis=1)
+    if not finite.all():
+        out = np.full((x.shape[0], 1), -1, dtype=np.int64)
+        if finite.any():
+            inner = padded_ball_query(tree, x[finite], r, p, k0)
+            out = np.full((x.shape[0], inner.shape[1]), -1, dtype=inner.dtype)
+            out[finite] = inner
+        return out
     M = x.shape[0]
     n_tree = tree.n
     k = min(k0, n_tree)

@@ -6,6 +6,8 @@ Taylor polynomial of the data at x_i (section 2.6, item 1); see
 """
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -318,10 +320,14 @@ class GERBSInterpolator:
         block = self.chunk_size
         if self.cover_kind == "balls":       # the candidate search itself within the work
             block = int(max(1, min(block, self._work // self.cover.search_bytes_per_query())))
-        for s in range(0, M, block):
-            e = min(M, s + block)
-            sel = order[s:e] if order is not None else slice(s, e)
-            out[sel] = self._eval_block(xf[sel], nu)
+        # NaN / infinite queries get the fill value; their arithmetic on the way is expected
+        quiet = np.errstate(invalid="ignore", divide="ignore") \
+            if not np.isfinite(xf).all() else contextlib.nullcontext()
+        with quiet:
+            for s in range(0, M, block):
+                e = min(M, s + block)
+                sel = order[s:e] if order is not None else slice(s, e)
+                out[sel] = self._eval_block(xf[sel], nu)
         return out.reshape(lead + self.vshape + (n,) * nu)
 
     def _spatial_order(self, x):

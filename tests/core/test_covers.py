@@ -263,3 +263,44 @@ def test_vectorized_barycentric_transforms_match_scipy():
         _set_transforms(Flat, pts)
         ref = _qhull._get_barycentric_transforms(pts, Flat.simplices.astype(np.intc), np.finfo(float).eps)
         assert np.array_equal(np.isnan(Flat._transform[:, 0, 0]), np.isnan(ref[:, 0, 0])), h
+
+
+@pytest.mark.parametrize("cover", ["delaunay", "voronoi"])
+def test_direct_envelope_formula_equals_the_row_tables(cover, monkeypatch):
+    """Covers above ``planar_star._TABLE_EDGES`` edges evaluate u_tilde by the direct
+    formula instead of the per-edge row tables; the two give the same bits (values,
+    gradients, Hessians, NaN queries and points outside the hull included). The tests'
+    covers are small, so the direct path is forced here by a threshold of 0."""
+    import gerbs_core.scattered.planar_star as ps
+    rng = np.random.default_rng(3)
+    P = np.concatenate([rng.random((600, 2)), 0.5 + 0.05 * rng.standard_normal((300, 2))])
+    Q = np.concatenate([rng.uniform(-0.1, 1.1, (3000, 2)), [[np.nan, 0.5], [0.5, np.nan]]])
+    tabled = GERBSInterpolator(P, f(P), cover=cover)
+    assert tabled.cover._sides is not None
+    monkeypatch.setattr(ps, "_TABLE_EDGES", 0)
+    direct = GERBSInterpolator(P, f(P), cover=cover)
+    assert direct.cover._sides is None
+    for nu in (0, 1, 2):
+        a, b = tabled(Q, nu=nu), direct(Q, nu=nu)
+        np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
+        assert np.array_equal(a, b, equal_nan=True)
+
+
+@pytest.mark.parametrize("cover", ["delaunay", "voronoi", "balls"])
+def test_non_finite_queries_give_nan_quietly_on_every_cover(cover):
+    """A NaN or infinite query point gets the fill value (NaN) for values and
+    derivatives, with no warning, on every cover; the finite queries beside it are
+    unaffected (before 2026-12-02 the Voronoi and ball covers raised scipy's KD-tree
+    error for the whole call)."""
+    import warnings
+    rng = np.random.default_rng(0)
+    P = rng.random((300, 2))
+    Q = np.array([[np.nan, 0.5], [0.5, np.inf], [-np.inf, np.nan], [0.5, 0.5], [0.3, 0.6]])
+    interp = GERBSInterpolator(P, f(P), cover=cover)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for nu in (0, 1, 2):
+            out = interp(Q, nu=nu)
+            assert np.isnan(out[:3]).all()
+            np.testing.assert_array_equal(out[3:], interp(Q[3:], nu=nu))
+            assert np.isfinite(out[3:]).all()
