@@ -30,3 +30,11 @@ def run_variant(patched, V, F, r, exact=True, **opts):
 
     with patched(**opts):
         return methods.gerbs_samples(V, F, r, exact=exact)
+
+
+def variant_of(patched, **opts):
+    """A bench_shape variant function (V, F, r, exact) -> samples: the default surface
+    built inside ``patched(**opts)``."""
+    def variant(V, F, r, exact=True):
+        return run_variant(patched, V, F, r, exact=exact, **opts)
+    return variant

@@ -28,7 +28,7 @@ import scipy.sparse as sp
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3]))
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-from shape.patching import patching, run_variant  # noqa: E402
+from shape.patching import patching, variant_of  # noqa: E402
 import gerbs_core.mesh.agreement as ag  # noqa: E402
 import gerbs_core.mesh.surface as surface  # noqa: E402
 from gerbs_core.mesh.crease_fits import CurveConstraints  # noqa: E402
@@ -89,10 +89,4 @@ def patched(**opts):
         yield
 
 
-def _variant(angle):
-    def f(V, F, r, exact=True):
-        return run_variant(patched, V, F, r, exact=exact, angle=angle)
-    return f
-
-
-p90, p75, p60 = (_variant(a) for a in (90.0, 75.0, 60.0))
+p90, p75, p60 = (variant_of(patched, angle=a) for a in (90.0, 75.0, 60.0))

@@ -19,7 +19,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3]))
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
-from shape.patching import patching, run_variant  # noqa: E402
+from shape.patching import patching, variant_of  # noqa: E402
 import gerbs_core.mesh.agreement as ag  # noqa: E402
 import gerbs_core.mesh.surface as surface  # noqa: E402
 
@@ -67,10 +67,4 @@ def patched(**opts):
         yield
 
 
-def _variant(angle):
-    def f(V, F, r, exact=True):
-        return run_variant(patched, V, F, r, exact=exact, angle=angle)
-    return f
-
-
-t90, t75, t105 = (_variant(a) for a in (90.0, 75.0, 105.0))
+t90, t75, t105 = (variant_of(patched, angle=a) for a in (90.0, 75.0, 105.0))
