@@ -50,7 +50,7 @@ from .coupling import coupled_fits, identity_fits
 from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomials, n_monomials
 from .row_values import (candidate_coefs, candidate_values, chunks, copy_aliases, own_rows,
-                         per_degree)
+                         per_degree, square_norms)
 from .spread_fits import SPREAD, gate, spread_candidates
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
@@ -231,7 +231,7 @@ def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
         for i, own, d in per_degree(cands, coefs, dm, np.concatenate([vert, vert])):
             k = len(d) // 2                                          # own: both halves' rows
             n = np.cross(d[:k], d[k:])
-            n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+            n /= np.maximum(np.sqrt(square_norms(n)), 1e-300)[:, None]    # np.linalg.norm's
             mine = slice(None) if own is None else own[:k]
             out[sl, i][mine] = np.maximum(0.0, rule.fold_cos - np.einsum("ij,ij->i", n, nf[mine])) ** 2
         copy_aliases(out[sl], cands, vert)
@@ -270,9 +270,9 @@ def _choose(cands, X, smp, rule, V, penalty, coefs=None):
     tension = np.empty((len(P), len(full)))
     for sl in chunks(len(P)):               # row by row: cache-sized temporaries
         tension[sl] = (rule.lam * (smp.sharp[sl] * P[sl])[:, None]
-                       * ((vf[sl] - cage[sl, None]) ** 2).sum(-1))
+                       * square_norms(vf[sl] - cage[sl, None]))
     tension += penalty[:, full]
-    own_tension = [rule.lam * (smp.sharp[o] * P[o]) * ((vals[o, i] - cage[o]) ** 2).sum(-1)
+    own_tension = [rule.lam * (smp.sharp[o] * P[o]) * square_norms(vals[o, i] - cage[o])
                    + penalty[o, i] for i, _, _, o in part]
     one = 1.0 - P
     # agreement of row s: P / (1 - P) |(1 - P) l - (T - P l_cur)|^2 (0 where P = 1)
@@ -287,12 +287,12 @@ def _choose(cands, X, smp, rule, V, penalty, coefs=None):
         others = S[smp.sample] - cur                           # sum of the other slots
         for sl in chunks(len(P)):
             gap = one[sl, None, None] * vf[sl] - others[sl, None, :]   # (1 - Psi) (l - T)
-            energy[sl] = scale[sl, None] * (gap ** 2).sum(-1) + tension[sl]
+            energy[sl] = scale[sl, None] * square_norms(gap) + tension[sl]
         for k, i in enumerate(full):
             E[:, i] = np.bincount(smp.vertex, energy[:, k], minlength=V)
         for (i, j, same, o), t in zip(part, own_tension):
             gap = one[o, None] * vals[o, i] - others[o]
-            mine = np.bincount(smp.vertex[o], scale[o] * (gap ** 2).sum(-1) + t, minlength=V)
+            mine = np.bincount(smp.vertex[o], scale[o] * square_norms(gap) + t, minlength=V)
             E[:, i] = np.where(same, E[:, j], mine)
         new = first_minimum(E)
         if np.array_equal(new, choice):

@@ -14,7 +14,7 @@ import scipy.sparse as sp
 from .monomials import n_monomials
 
 __all__ = ["CHUNK_ROWS", "row_matrix", "rows_apply", "candidate_coefs", "own_rows",
-           "copy_aliases", "per_degree", "chunks", "candidate_values"]
+           "copy_aliases", "per_degree", "square_norms", "chunks", "candidate_values"]
 
 CHUNK_ROWS = 8192             # rows per chunk of the energies' row-by-row work
 
@@ -76,6 +76,14 @@ def per_degree(cands, coefs, B, vertex):
                 yield i, None, rows @ coefs[i]
             elif len(own):
                 yield i, own, row_matrix(B[own, :M], vertex[own], V) @ coefs[i]
+
+
+def square_norms(d):
+    """|d|^2 (...) over the last axis (length 3) of d (..., 3), summed (d0^2 + d1^2) + d2^2:
+    the order of numpy's ``(d ** 2).sum(-1)`` (bit for bit), without its slow reduction
+    over a short axis (measured 2x on the choice's energies)."""
+    g = d * d
+    return g[..., 0] + g[..., 1] + g[..., 2]
 
 
 def chunks(n):
