@@ -152,20 +152,37 @@ def candidate_fits_all(rings, rules) -> list:
         step = max(1, CHUNK_DATA // n)
         for c0 in range(0, len(batch), step):
             _fit_chunk(rings, rules, acc, batch[c0:c0 + step], n, cnt, n1, n2, wider, dmax)
-    for (degree, layers), a in zip(rules, acc):
-        matrix, rhs = _block_rows(a["blocks"], V, n_monomials(degree))
-        alias = (rules.index((degree, 2)), a["alias"]) if a["alias"].any() else None
-        out.append(CandidateFits(degree, matrix, a["normal"], rhs, alias))
+    mats = [_block_rows(a["blocks"], V, n_monomials(d)) for (d, _), a in zip(rules, acc)]
+    for i, ((degree, _), a) in enumerate(zip(rules, acc)):
+        alias = None
+        if a["alias"].any():
+            alias = (rules.index((degree, 2)), a["alias"])
+            mats[i] = _merged_rows(mats[alias[0]], mats[i], a["alias"], degree, V)
+        out.append(CandidateFits(degree, mats[i][0], a["normal"], mats[i][1], alias))
     return out
+
+
+def _merged_rows(wide, own, same, degree, V):
+    """(matrix, rhs) of an aliased rule: the rows of the (d, 2) rule's ``wide`` (matrix,
+    rhs) at the vertices ``same`` (V,), its ``own`` rows elsewhere, copied as they are
+    (:func:`chosen_rows`): the entries its blocks would have given, row by row (scipy
+    sorts and sums each row's coordinates by itself). All aliased: wide's matrices."""
+    if same.all():
+        return wide
+    pair = [CandidateFits(degree, m, None, r) for m, r in (wide, own)]
+    pick = np.where(same, 0, 1)
+    M = n_monomials(degree)
+    return tuple(chosen_rows(pair, pick, part, V, M) for part in ("matrix", "rhs"))
 
 
 def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
     """The fits of the vertices vs (K,), padded to n data, for every rule: normal matrices
     into acc[rule]["normal"], operator blocks appended to acc[rule]["blocks"], and for a
     ring-1 rule (d, 1) whose (d, 2) is a rule too, acc[rule]["alias"][v] set where v falls
-    back to two layers: its fit is then the (d, 2) fit, taken from it bit for bit (the
-    same data, weights and arithmetic) instead of computed again (Suzanne 501 of 507
-    vertices for (3, 1), every vertex of a quad grid or an icosphere)."""
+    back to two layers: its fit is then the (d, 2) fit (the same data, weights and
+    arithmetic), whose normal matrices and rows (:func:`_merged_rows`) it takes instead of
+    computing them again (Suzanne 501 of 507 vertices for (3, 1), every vertex of a quad
+    grid or an icosphere)."""
     k = np.arange(n)[None, :]
     idx = rings.offsets[vs][:, None] + np.minimum(k, cnt[vs][:, None] - 1)
     real = k < cnt[vs][:, None]
@@ -174,7 +191,7 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
     h = rings.h[vs]
     Ball = monomials(y, dmax)[0]                          # (K, n, M_max)
     q = rings.ids[idx]
-    done = {}                                             # rule -> (use, N, A, bw), block
+    done = {}                                             # (d, 2) -> its normal matrices
     # the wider rules first, so that a ring-1 rule's fallback can take theirs
     for j in sorted(range(len(rules)), key=lambda j: -rules[j][1]):
         (degree, layers), a = rules[j], acc[j]
@@ -191,27 +208,23 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
             use_layers[s[cond <= MAX_CONDITION]] = layers
         wide = done.get((degree, 2)) if layers < 2 else None
         if wide is not None and np.any(use_layers == 2):
+            # the fallen-back vertices' rows are the (d, 2) fit's (_merged_rows); blocks of
+            # the others only
             a["alias"][vs] = use_layers == 2
+            a["normal"][vs] = wide
             own = np.flatnonzero(use_layers < 2)
-            if not len(own):                              # all fall back: the (d, 2) fit
-                a["normal"][vs] = wide[0][1]
-                a["blocks"].append(wide[1])
-                continue
-            # copies in the same memory layout (bw is a transposed view): _compact's sums
-            # over the data then run in the same order, so they are equal bit for bit
-            fit = [np.copy(x, order="K") for x in wide[0]]
-            for full, part in zip(fit, _fit(y[own], B[own], real[own] & (ring[own] <= layers),
-                                            h[own], degree)):
-                full[own] = part
-        else:
-            use_layers = np.where((use_layers == 2) & (n2[vs] < M + 2), wider, use_layers)
-            fit = _fit(y, B, real & (ring <= use_layers[:, None]), h, degree)
-        use, N, A, bw = fit
+            if len(own):
+                use, N, A, bw = _fit(y[own], B[own], real[own] & (ring[own] <= layers),
+                                     h[own], degree)
+                a["normal"][vs[own]] = N
+                a["blocks"].append(_compact(vs[own], use, q[own], A, bw))
+            continue
+        use_layers = np.where((use_layers == 2) & (n2[vs] < M + 2), wider, use_layers)
+        use, N, A, bw = _fit(y, B, real & (ring <= use_layers[:, None]), h, degree)
         a["normal"][vs] = N
-        block = _compact(vs, use, q, A, bw)               # A, bw: zero off the used data
-        a["blocks"].append(block)
+        a["blocks"].append(_compact(vs, use, q, A, bw))   # A, bw: zero off the used data
         if layers == 2:
-            done[(degree, layers)] = fit, block
+            done[(degree, layers)] = N
 
 
 def _fit(y, B, use, h, degree):
