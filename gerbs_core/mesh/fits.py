@@ -177,12 +177,10 @@ def _merged_rows(wide, own, same, degree, V):
 
 def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
     """The fits of the vertices vs (K,), padded to n data, for every rule: normal matrices
-    into acc[rule]["normal"], operator blocks appended to acc[rule]["blocks"], and for a
-    ring-1 rule (d, 1) whose (d, 2) is a rule too, acc[rule]["alias"][v] set where v falls
-    back to two layers: its fit is then the (d, 2) fit (the same data, weights and
-    arithmetic), whose normal matrices and rows (:func:`_merged_rows`) it takes instead of
-    computing them again (Suzanne 501 of 507 vertices for (3, 1), every vertex of a quad
-    grid or an icosphere)."""
+    into acc[rule]["normal"], operator blocks appended to acc[rule]["blocks"]; a ring-1
+    rule (d, 1) with (d, 2) a rule too gets acc[rule]["alias"][v] where v falls back to two
+    layers: its fit is the (d, 2) fit there (the same data, weights and arithmetic), whose
+    normals and rows (:func:`_merged_rows`) it takes instead of computing them again."""
     k = np.arange(n)[None, :]
     idx = rings.offsets[vs][:, None] + np.minimum(k, cnt[vs][:, None] - 1)
     real = k < cnt[vs][:, None]
@@ -205,11 +203,10 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
             lam = shared_rows(N1, np.linalg.eigvalsh)
             cond = lam[:, -1] / np.maximum(lam[:, 0], 1e-300)
             use_layers[:] = 2
-            use_layers[s[cond <= MAX_CONDITION]] = layers
+            use_layers[s[~(cond > MAX_CONDITION)]] = layers
         wide = done.get((degree, 2)) if layers < 2 else None
         if wide is not None and np.any(use_layers == 2):
-            # the fallen-back vertices' rows are the (d, 2) fit's (_merged_rows); blocks of
-            # the others only
+            # the fallen-back vertices' rows are the (d, 2) fit's: blocks of the others only
             a["alias"][vs] = use_layers == 2
             a["normal"][vs] = wide
             own = np.flatnonzero(use_layers < 2)
