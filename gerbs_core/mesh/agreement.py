@@ -39,6 +39,7 @@ with the Cube and Cylinder inside the acceptance boxes.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,7 +51,7 @@ from .coupling import coupled_fits, identity_fits
 from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomials, n_monomials
 from .row_values import (candidate_coefs, candidate_values, chunks, copy_aliases, own_rows,
-                         per_degree, square_norms)
+                         per_degree, row_sums, square_norms)
 from .spread_fits import SPREAD, gate, spread_candidates
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
@@ -161,12 +162,13 @@ def _shepard_weights(topo, corners2d, face, x):
     nmax = int(topo.face_sizes.max())
     cn = topo.face_offsets[face][:, None] + np.arange(nmax)
     real = np.arange(nmax)[None, :] < topo.face_sizes[face][:, None]
-    d2 = ((corners2d[np.where(real, cn, 0)] - x[:, None, :]) ** 2).sum(-1)
-    at = d2 <= 1e-24 * np.max(d2, axis=1, keepdims=True)     # a sample on a corner
+    d2 = square_norms(corners2d[np.where(real, cn, 0)] - x[:, None, :])
+    big = functools.reduce(np.maximum, d2.T)                  # np.max(d2, axis=1), exact
+    at = d2 <= 1e-24 * big[:, None]                           # a sample on a corner
     w = np.where(real, 1.0 / np.where(at | ~real, 1.0, d2), 0.0)
     hit = at.any(axis=1)
     w[hit] = (at & real)[hit]
-    return w / w.sum(axis=1, keepdims=True)
+    return w / row_sums(w)[:, None]
 
 
 def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
