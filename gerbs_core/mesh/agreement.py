@@ -227,7 +227,6 @@ def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
     dmax = max(c.degree for c in cands)
     for sl in chunks(len(smp.vertex)):
         nf, vert = fn[smp.face[sl]], smp.vertex[sl]
-        SC = len(vert)
         dm = monomials(smp.y[sl], dmax, 1)[1]                       # (SC, M, 2)
         dm = np.concatenate([dm[..., 0], dm[..., 1]])               # (2 SC, M): d/dy1, d/dy2
         for i, own, d in per_degree(cands, coefs, dm, np.concatenate([vert, vert])):
@@ -235,7 +234,8 @@ def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
             n = np.cross(d[:k], d[k:])
             n /= np.maximum(np.sqrt(square_norms(n)), 1e-300)[:, None]    # np.linalg.norm's
             mine = slice(None) if own is None else own[:k]
-            out[sl, i][mine] = np.maximum(0.0, rule.fold_cos - np.einsum("ij,ij->i", n, nf[mine])) ** 2
+            cos = np.einsum("ij,ij->i", n, nf[mine])
+            out[sl, i][mine] = np.maximum(0.0, rule.fold_cos - cos) ** 2
         copy_aliases(out[sl], cands, vert)
     return (rule.fold * h[smp.vertex] ** 2 * smp.weight * smp.psi)[:, None] * out
 
