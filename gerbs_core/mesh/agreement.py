@@ -39,6 +39,7 @@ with the Cube and Cylinder inside the acceptance boxes.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,7 +50,8 @@ from .cover import require_cover
 from .coupling import coupled_fits, identity_fits
 from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomials, n_monomials
-from .row_values import candidate_coefs, candidate_values, chunks, per_degree
+from .row_values import (candidate_coefs, candidate_values, chunks, copy_aliases, own_rows,
+                         per_degree, row_sums, square_norms)
 from .spread_fits import SPREAD, gate, spread_candidates
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
@@ -160,12 +162,13 @@ def _shepard_weights(topo, corners2d, face, x):
     nmax = int(topo.face_sizes.max())
     cn = topo.face_offsets[face][:, None] + np.arange(nmax)
     real = np.arange(nmax)[None, :] < topo.face_sizes[face][:, None]
-    d2 = ((corners2d[np.where(real, cn, 0)] - x[:, None, :]) ** 2).sum(-1)
-    at = d2 <= 1e-24 * np.max(d2, axis=1, keepdims=True)     # a sample on a corner
+    d2 = square_norms(corners2d[np.where(real, cn, 0)] - x[:, None, :])
+    big = functools.reduce(np.maximum, d2.T)                  # np.max(d2, axis=1), exact
+    at = d2 <= 1e-24 * big[:, None]                           # a sample on a corner
     w = np.where(real, 1.0 / np.where(at | ~real, 1.0, d2), 0.0)
     hit = at.any(axis=1)
     w[hit] = (at & real)[hit]
-    return w / w.sum(axis=1, keepdims=True)
+    return w / row_sums(w)[:, None]
 
 
 def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
@@ -224,13 +227,16 @@ def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
     dmax = max(c.degree for c in cands)
     for sl in chunks(len(smp.vertex)):
         nf, vert = fn[smp.face[sl]], smp.vertex[sl]
-        SC = len(vert)
         dm = monomials(smp.y[sl], dmax, 1)[1]                       # (SC, M, 2)
         dm = np.concatenate([dm[..., 0], dm[..., 1]])               # (2 SC, M): d/dy1, d/dy2
-        for i, d in per_degree(cands, coefs, dm, np.concatenate([vert, vert])):
-            n = np.cross(d[:SC], d[SC:])
-            n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-            out[sl, i] = np.maximum(0.0, rule.fold_cos - np.einsum("ij,ij->i", n, nf)) ** 2
+        for i, own, d in per_degree(cands, coefs, dm, np.concatenate([vert, vert])):
+            k = len(d) // 2                                          # own: both halves' rows
+            n = np.cross(d[:k], d[k:])
+            n /= np.maximum(np.sqrt(square_norms(n)), 1e-300)[:, None]    # np.linalg.norm's
+            mine = slice(None) if own is None else own[:k]
+            cos = np.einsum("ij,ij->i", n, nf[mine])
+            out[sl, i][mine] = np.maximum(0.0, rule.fold_cos - cos) ** 2
+        copy_aliases(out[sl], cands, vert)
     return (rule.fold * h[smp.vertex] ** 2 * smp.weight * smp.psi)[:, None] * out
 
 
@@ -250,32 +256,46 @@ def first_minimum(E: np.ndarray, tie: float = TIE) -> np.ndarray:
 def _choose(cands, X, smp, rule, V, penalty, coefs=None):
     """The candidate of every vertex (V,): least mu * agreement + lam * tension + the fold
     ``penalty`` (SC, ncand) (rest shape); coefs: the candidates' coefficients at X (made
-    here if not given)."""
+    here if not given). An aliased candidate (:attr:`~gerbs_core.mesh.fits.CandidateFits.alias`)
+    is evaluated on its own rows only; at the vertices it shares with its source j its
+    energy is j's, as its evaluation would give it bit for bit (the same values), so the
+    choice -- ties to the lower index -- is the same."""
     vals = candidate_values(cands, X, smp.vertex, smp.Bu, coefs)
     cage = (smp.cage @ X)[smp.sample]
     # per sample, not per face (unlike the coupling): measured Suzanne 126 pairs above
     # 60 degrees against 156 with the per-face weights
     P = smp.psi
-    tension = np.empty(penalty.shape)
+    full = [i for i, c in enumerate(cands) if c.alias is None]
+    part = [(i, *c.alias, own_rows(c, smp.vertex)) for i, c in enumerate(cands)
+            if c.alias is not None]
+    vf = vals if not part else vals[:, full]        # the candidates evaluated on every row
+    tension = np.empty((len(P), len(full)))
     for sl in chunks(len(P)):               # row by row: cache-sized temporaries
         tension[sl] = (rule.lam * (smp.sharp[sl] * P[sl])[:, None]
-                       * ((vals[sl] - cage[sl, None]) ** 2).sum(-1))
-    tension += penalty
+                       * square_norms(vf[sl] - cage[sl, None]))
+    tension += penalty[:, full]
+    own_tension = [rule.lam * (smp.sharp[o] * P[o]) * square_norms(vals[o, i] - cage[o])
+                   + penalty[o, i] for i, _, _, o in part]
     one = 1.0 - P
     # agreement of row s: P / (1 - P) |(1 - P) l - (T - P l_cur)|^2 (0 where P = 1)
     scale = np.where(one > 1e-12, P / np.where(one > 1e-12, one, 1.0), 0.0)
     choice = np.zeros(V, dtype=np.int64)
     energy = np.empty(tension.shape)
+    E = np.empty((V, len(cands)))
     for _ in range(rule.choice_rounds):
         cur = P[:, None] * vals[np.arange(len(P)), choice[smp.vertex]]
         S = np.stack([np.bincount(smp.sample, cur[:, k], minlength=smp.n_samples)
                       for k in range(3)], 1)
         others = S[smp.sample] - cur                           # sum of the other slots
         for sl in chunks(len(P)):
-            gap = one[sl, None, None] * vals[sl] - others[sl, None, :]   # (1 - Psi) (l - T)
-            energy[sl] = scale[sl, None] * (gap ** 2).sum(-1) + tension[sl]
-        E = np.stack([np.bincount(smp.vertex, energy[:, i], minlength=V)
-                      for i in range(len(cands))], 1)
+            gap = one[sl, None, None] * vf[sl] - others[sl, None, :]   # (1 - Psi) (l - T)
+            energy[sl] = scale[sl, None] * square_norms(gap) + tension[sl]
+        for k, i in enumerate(full):
+            E[:, i] = np.bincount(smp.vertex, energy[:, k], minlength=V)
+        for (i, j, same, o), t in zip(part, own_tension):
+            gap = one[o, None] * vals[o, i] - others[o]
+            mine = np.bincount(smp.vertex[o], scale[o] * square_norms(gap) + t, minlength=V)
+            E[:, i] = np.where(same, E[:, j], mine)
         new = first_minimum(E)
         if np.array_equal(new, choice):
             break

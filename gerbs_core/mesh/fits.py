@@ -98,10 +98,14 @@ class CandidateFits:
     UNSCALED chart coordinates (pin included: c = matrix @ X). ``normal`` (V, M, M):
     the data normal matrices in scaled coordinates y / h_v (for the coupled fits of
     :mod:`gerbs_core.mesh.agreement`), ``rhs`` (V*M, V) sparse: their right-hand sides.
+    ``alias``: None, or (j, same (V,) bool): at the vertices ``same`` this fit is
+    candidate j's (same degree) bit for bit -- rows, right-hand sides and normal matrices
+    -- so the choice need not evaluate it there (a ring-1 rule fallen back to two layers).
     """
 
-    def __init__(self, degree, matrix, normal, rhs):
+    def __init__(self, degree, matrix, normal, rhs, alias=None):
         self.degree, self.matrix, self.normal, self.rhs = degree, matrix, normal, rhs
+        self.alias = alias
 
 
 def _data_weights(y, use):
@@ -137,8 +141,8 @@ def candidate_fits_all(rings, rules) -> list:
     n2 = np.bincount(owner[rings.ring <= 2], minlength=V)
     wider = 3 if np.any(rings.ring == 3) else 2
     out = []
-    acc = [{"normal": np.zeros((V, n_monomials(d), n_monomials(d))), "blocks": []}
-           for d, _ in rules]
+    acc = [{"normal": np.zeros((V, n_monomials(d), n_monomials(d))), "blocks": [],
+            "alias": np.zeros(V, dtype=bool)} for d, _ in rules]
     # batches of equal padded length (powers of two): little padding for high valences;
     # in chunks of vertices whose working set stays in cache (measured: whole batches made
     # the time per vertex grow 1.4x from a 64x64 to a 128x128 grid)
@@ -148,42 +152,91 @@ def candidate_fits_all(rings, rules) -> list:
         step = max(1, CHUNK_DATA // n)
         for c0 in range(0, len(batch), step):
             _fit_chunk(rings, rules, acc, batch[c0:c0 + step], n, cnt, n1, n2, wider, dmax)
-    for (degree, _), a in zip(rules, acc):
-        matrix, rhs = _block_rows(a["blocks"], V, n_monomials(degree))
-        out.append(CandidateFits(degree, matrix, a["normal"], rhs))
+    mats = [_block_rows(a["blocks"], V, n_monomials(d)) for (d, _), a in zip(rules, acc)]
+    for i, ((degree, _), a) in enumerate(zip(rules, acc)):
+        alias = None
+        if a["alias"].any():
+            alias = (rules.index((degree, 2)), a["alias"])
+            mats[i] = _merged_rows(mats[alias[0]], mats[i], a["alias"], degree, V)
+        out.append(CandidateFits(degree, mats[i][0], a["normal"], mats[i][1], alias))
     return out
+
+
+def _merged_rows(wide, own, same, degree, V):
+    """(matrix, rhs) of an aliased rule: the rows of the (d, 2) rule's ``wide`` (matrix,
+    rhs) at the vertices ``same`` (V,), its ``own`` rows elsewhere, copied as they are
+    (:func:`chosen_rows`): the entries its blocks would have given, row by row (scipy
+    sorts and sums each row's coordinates by itself). All aliased: wide's matrices."""
+    if same.all():
+        return wide
+    pair = [CandidateFits(degree, m, None, r) for m, r in (wide, own)]
+    pick = np.where(same, 0, 1)
+    M = n_monomials(degree)
+    return tuple(chosen_rows(pair, pick, part, V, M) for part in ("matrix", "rhs"))
 
 
 def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
     """The fits of the vertices vs (K,), padded to n data, for every rule: normal matrices
-    into acc[rule]["normal"], operator blocks appended to acc[rule]["blocks"]."""
+    into acc[rule]["normal"], operator blocks appended to acc[rule]["blocks"]; a ring-1
+    rule (d, 1) with (d, 2) a rule too gets acc[rule]["alias"][v] where v falls back to two
+    layers: its fit is the (d, 2) fit there (the same data, weights and arithmetic), whose
+    normals and rows (:func:`_merged_rows`) it takes instead of computing them again."""
     k = np.arange(n)[None, :]
     idx = rings.offsets[vs][:, None] + np.minimum(k, cnt[vs][:, None] - 1)
     real = k < cnt[vs][:, None]
     ring = rings.ring[idx]
     y = rings.y[idx] / rings.h[vs][:, None, None]
+    h = rings.h[vs]
     Ball = monomials(y, dmax)[0]                          # (K, n, M_max)
     q = rings.ids[idx]
-    for (degree, layers), a in zip(rules, acc):
+    done = {}                                             # (d, 2) -> its normal matrices
+    # the wider rules first, so that a ring-1 rule's fallback can take theirs
+    for j in sorted(range(len(rules)), key=lambda j: -rules[j][1]):
+        (degree, layers), a = rules[j], acc[j]
         M = n_monomials(degree)
         B = Ball[..., :M]
         use_layers = np.full(len(vs), layers)
         if layers < 2:
-            N1 = _normal(B, _data_weights(y, real & (ring <= 1)))
+            # the condition only where ring 1 holds enough data (else ring 2 is taken anyway)
+            s = np.flatnonzero(n1[vs] >= M + 2)
+            N1 = _normal(B[s], _data_weights(y[s], real[s] & (ring[s] <= 1)))
             lam = shared_rows(N1, np.linalg.eigvalsh)
             cond = lam[:, -1] / np.maximum(lam[:, 0], 1e-300)
-            use_layers = np.where((n1[vs] < M + 2) | (cond > MAX_CONDITION), 2, use_layers)
+            use_layers[:] = 2
+            use_layers[s[~(cond > MAX_CONDITION)]] = layers
+        wide = done.get((degree, 2)) if layers < 2 else None
+        if wide is not None and np.any(use_layers == 2):
+            # the fallen-back vertices' rows are the (d, 2) fit's: blocks of the others only
+            a["alias"][vs] = use_layers == 2
+            a["normal"][vs] = wide
+            own = np.flatnonzero(use_layers < 2)
+            if len(own):
+                use, N, A, bw = _fit(y[own], B[own], real[own] & (ring[own] <= layers),
+                                     h[own], degree)
+                a["normal"][vs[own]] = N
+                a["blocks"].append(_compact(vs[own], use, q[own], A, bw))
+            continue
         use_layers = np.where((use_layers == 2) & (n2[vs] < M + 2), wider, use_layers)
-        use = real & (ring <= use_layers[:, None])
-        w = _data_weights(y, use)
-        w /= np.maximum(w.sum(1, keepdims=True), 1e-300)  # per vertex: weights sum to 1
-        bw = np.swapaxes(B * w[..., None], 1, 2)          # (K, M, n)
-        N = bw @ B
+        use, N, A, bw = _fit(y, B, real & (ring <= use_layers[:, None]), h, degree)
         a["normal"][vs] = N
-        Pinv = pinned_normal_inverse(N, degree)
-        deg_of = monomial_exponents(degree).sum(1)
-        A = (Pinv @ bw) / rings.h[vs][:, None, None] ** deg_of[None, :, None]  # unscaled
         a["blocks"].append(_compact(vs, use, q, A, bw))   # A, bw: zero off the used data
+        if layers == 2:
+            done[(degree, layers)] = N
+
+
+def _fit(y, B, use, h, degree):
+    """(use, N (K, M, M), A (K, M, n), bw (K, M, n)) of the fits of the data ``use`` (K, n)
+    at scaled chart positions y (K, n, 2), designs B (K, n, M), chart scales h (K,):
+    normal matrices, the unscaled operators (A, zero off the used data) and the
+    weighted designs (the normal equations' right-hand sides)."""
+    w = _data_weights(y, use)
+    w /= np.maximum(w.sum(1, keepdims=True), 1e-300)      # per vertex: weights sum to 1
+    bw = np.swapaxes(B * w[..., None], 1, 2)              # (K, M, n)
+    N = bw @ B
+    Pinv = pinned_normal_inverse(N, degree)
+    deg_of = monomial_exponents(degree).sum(1)
+    A = (Pinv @ bw) / h[:, None, None] ** deg_of[None, :, None]  # unscaled
+    return use, N, A, bw
 
 
 def _compact(vs, use, q, A, bw):

@@ -13,8 +13,9 @@ import scipy.sparse as sp
 
 from .monomials import n_monomials
 
-__all__ = ["CHUNK_ROWS", "row_matrix", "rows_apply", "candidate_coefs", "per_degree",
-           "chunks", "candidate_values"]
+__all__ = ["CHUNK_ROWS", "row_matrix", "rows_apply", "candidate_coefs", "own_rows",
+           "copy_aliases", "per_degree", "row_sums", "square_norms", "chunks",
+           "candidate_values"]
 
 CHUNK_ROWS = 8192             # rows per chunk of the energies' row-by-row work
 
@@ -41,15 +42,60 @@ def candidate_coefs(cands, X):
     return [(c.matrix @ X).reshape(-1, 3) for c in cands]
 
 
+def own_rows(cand, vertex):
+    """None (every row), or the rows (indices into vertex) of the vertices where the
+    candidate is its own fit -- elsewhere it is another candidate's bit for bit
+    (:attr:`~gerbs_core.mesh.fits.CandidateFits.alias`), whose values it takes."""
+    return None if cand.alias is None else np.flatnonzero(~cand.alias[1][vertex])
+
+
+def copy_aliases(out, cands, vertex):
+    """out (SC, ncand, ...) with each aliased candidate's entries at the rows of the
+    vertices it shares with its source j copied from j's: the values its own evaluation
+    would give there, bit for bit (the same coefficients through the same arithmetic)."""
+    for i, c in enumerate(cands):
+        if c.alias is not None:
+            j, same = c.alias
+            r = same[vertex]
+            out[r, i] = out[r, j]
+    return out
+
+
 def per_degree(cands, coefs, B, vertex):
-    """Yields (i, rows_apply(B[:, :M], vertex, coefs[i])) for every candidate i, M its
-    coefficient count: one row matrix serves all candidates of a size."""
+    """Yields (i, own, values) for every candidate i, M its coefficient count: own None and
+    values = rows_apply(B[:, :M], vertex, coefs[i]) (one row matrix serves all candidates
+    of a size), or, for an aliased candidate, own its own rows (:func:`own_rows`) and the
+    values there only (none: not yielded); :func:`copy_aliases` fills the rest."""
     V = cands[0].matrix.shape[1]
     sizes = [n_monomials(c.degree) for c in cands]
     for M in sorted(set(sizes)):
-        rows = row_matrix(B[:, :M], vertex, V)
+        rows = None
         for i in np.flatnonzero(np.array(sizes) == M).tolist():
-            yield i, rows @ coefs[i]
+            own = own_rows(cands[i], vertex)
+            if own is None:
+                rows = row_matrix(B[:, :M], vertex, V) if rows is None else rows
+                yield i, None, rows @ coefs[i]
+            elif len(own):
+                yield i, own, row_matrix(B[own, :M], vertex[own], V) @ coefs[i]
+
+
+def row_sums(w):
+    """w (..., n) summed over its last axis, bit for bit ``w.sum(-1)``: below 8 terms numpy
+    adds them in order, ((w0 + w1) + w2) + ..., done here column by column without its slow
+    reduction over a short axis (measured 2-4x); from 8 on (pairwise sums) numpy's own."""
+    n = w.shape[-1]
+    if n >= 8 or n == 0:
+        return w.sum(-1)
+    out = w[..., 0].copy()
+    for k in range(1, n):
+        out += w[..., k]
+    return out
+
+
+def square_norms(d):
+    """|d|^2 (...) over the last axis of d (..., n): bit for bit ``(d ** 2).sum(-1)``
+    (:func:`row_sums`)."""
+    return row_sums(d * d)
 
 
 def chunks(n):
@@ -65,6 +111,10 @@ def candidate_values(cands, X, vertex, Bu, coefs=None):
     out = np.empty((len(vertex), len(cands), 3))
     for sl in chunks(len(vertex)):
         Xs = X[vertex[sl]]
-        for i, v in per_degree(cands, coefs, Bu[sl], vertex[sl]):
-            out[sl, i] = Xs + v
+        for i, own, v in per_degree(cands, coefs, Bu[sl], vertex[sl]):
+            if own is None:
+                out[sl, i] = Xs + v
+            else:
+                out[sl, i][own] = Xs[own] + v
+        copy_aliases(out[sl], cands, vertex[sl])
     return out

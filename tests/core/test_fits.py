@@ -4,7 +4,8 @@ import pytest
 
 from gerbs_core.datasets import primitives as P
 from gerbs_core.mesh.charts import vertex_charts
-from gerbs_core.mesh.fits import CANDIDATES, candidate_fits, pinned_normal_inverse
+from gerbs_core.mesh.fits import (CANDIDATES, candidate_fits, candidate_fits_all,
+                                  pinned_normal_inverse)
 from gerbs_core.mesh.layout import face_layouts
 from gerbs_core.mesh.monomials import bending_gram, monomial_exponents, monomials, n_monomials
 from gerbs_core.mesh.rings import data_rings
@@ -62,6 +63,38 @@ def test_fits_are_linear_and_pinned():
     assert np.allclose(fits.matrix @ (2 * A - B), 2 * (fits.matrix @ A) - fits.matrix @ B)
     # a constant field has zero coefficients (the pin carries it)
     assert np.abs(fits.matrix @ np.full(len(V), 3.0)).max() < 1e-12
+
+
+@pytest.mark.parametrize("mesh", ["suzanne", "mixed", "grid"])
+def test_ring1_fallbacks_alias_the_two_ring_fit_bit_for_bit(mesh):
+    # with (3, 2) among the rules, (3, 1) takes its fit where it falls back to two layers
+    # instead of computing it: it must equal the rule fitted alone (no sharing) bit for
+    # bit, and its rows at the aliased vertices must be (3, 2)'s
+    V, F = {"suzanne": P.suzanne, "mixed": lambda: P.mixed_mesh(0.3),
+            "grid": lambda: P.grid(6)}[mesh]()
+    *_, rings = _setup(np.asarray(V, float), F)
+    cands = candidate_fits_all(rings, CANDIDATES)
+    i, j = CANDIDATES.index((3, 1)), CANDIDATES.index((3, 2))
+    alone = candidate_fits(rings, 3, 1)
+    assert alone.alias is None
+    for part in ("matrix", "rhs"):
+        a, b = getattr(cands[i], part).tocsr(), getattr(alone, part).tocsr()
+        assert np.array_equal(a.indptr, b.indptr) and np.array_equal(a.indices, b.indices)
+        assert np.array_equal(a.data, b.data)
+    assert np.array_equal(cands[i].normal, alone.normal)
+    k, same = cands[i].alias
+    assert k == j and same.any()
+    if mesh == "grid":
+        assert same.all()       # ring 1 of a quad grid holds fewer than M + 2 = 11 data
+    else:
+        assert not same.all()   # some stars fit ring 1 alone: both paths are exercised
+    M = n_monomials(3)
+    rows = (np.flatnonzero(same)[:, None] * M + np.arange(M)).ravel()
+    for part in ("matrix", "rhs"):
+        a, b = getattr(cands[i], part).tocsr()[rows], getattr(cands[j], part).tocsr()[rows]
+        assert (a != b).nnz == 0
+    assert np.array_equal(cands[i].normal[same], cands[j].normal[same])
+    assert all(c.alias is None for c in cands if c is not cands[i])
 
 
 def test_rings_do_not_depend_on_the_face_order_or_the_star_start():
