@@ -31,13 +31,14 @@ SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
 NODE_GROUP_NAME = "GERBS Blending Surface"
 MODIFIER_NAME = "GERBS Blending Surface"
 GROUP_TAG = "gerbs_group_version"  # custom property on the node group
-GROUP_VERSION = 7  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
+GROUP_VERSION = 8  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
 # Shape; 4: Merge by Distance, Merge Distance and the Warning line; 5: Render Resolution
 # and a render result, the built settings and carried attributes recorded on each result
 # (no "Built ..." inputs), the input passed on while stale; 6: the channel says which
 # record the input's topology and carried layers equal (CHANNEL_RECORD); 7: the checks
 # reduce over a selection (node_helpers.Tree.none_differ), one pass over the faces, one
-# comparison per value (node_fresh._differs)
+# comparison per value (node_fresh._differs); 8: with Use Custom Normals the input's vertex
+# normals are checked against the record and passed on in the channel (CHANNEL_NORMAL)
 PART_TAG = "gerbs_part"  # custom property on each nested node group (node_parts.py): its key
 PART_VERSION = "gerbs_part_version"  # ... and the GROUP_VERSION it was built for
 PART_PREFIX = ".GERBS "  # name prefix of the nested node groups
@@ -82,6 +83,8 @@ OUT_WEIGHT = ".gerbs_src_weight_"  # + i: POINT FLOAT, output weights of vertex-
 # modifiers below GERBS (they move "position" only).
 CHANNEL_PREFIX = ".gerbs_in_"
 CHANNEL_POSITION = ".gerbs_in_position"  # POINT, FLOAT_VECTOR
+CHANNEL_NORMAL = ".gerbs_in_normal"  # POINT, FLOAT_VECTOR: its vertex normals (Use Custom
+#   Normals only): a modifier below moves the final mesh's normals with its positions
 CHANNEL_WEIGHT = ".gerbs_in_weight_"  # + i: POINT FLOAT, the weights of vertex-group layer i
 CHANNEL_FACE_SIZE = ".gerbs_in_face_size"  # FACE INT: corners of each face, unless CHANNEL_RECORD
 #   names a record (one raw read instead of Blender's per-face "loop_start", ~2 ms / 70k faces)

@@ -10,13 +10,15 @@ A result (the geometry of the hidden result object) is *fresh* when its record
         domain and type from the result's layer table) exists and equals the record's
         values, element by element (a repeat zone over the layers)
     and every recorded setting == the current one ("resolution" the one asked for)
+    and, with Use Custom Normals, every vertex normal == the record's (the Normal node
+        on points is bit for bit the mesh's ``vertex_normals`` the add-on stored)
 
 Also here: writing the carried vertex-group weights into the result's vertex groups
 (Store Named Attribute into a name that is a vertex group of the geometry writes the
 group), and the *channel*: while no surface is shown, the input passes on with its
-positions (and its vertex-group weights) copied into hidden attributes, which
-deform-only modifiers below GERBS leave alone, so the add-on can read what GERBS
-received from the final mesh.
+positions (its vertex normals with Use Custom Normals, and its vertex-group weights)
+copied into hidden attributes, which deform-only modifiers below GERBS leave alone, so
+the add-on can read what GERBS received from the final mesh.
 
 The public builders (:func:`fresh`, :func:`shown`, :func:`channel`) add one Group node
 per check, using the nested groups (node_parts.py) they build on first use: one per
@@ -39,8 +41,10 @@ def fresh(t, base, result, names, current: dict, resolution):
               for spec in ids.RECORD_SETTINGS}
     geometry = t.group(_geometry_part(), {"Base": base, "Result": result})
     layers = t.group(_layers_part(), {"Base": base, "Result": result, "Names": names})["Fresh"]
+    normals = t.group(_normals_part(), {"Base": base, "Result": result,
+                                        "Use": current["use_normals"]})["Fresh"]
     return (t.boolean("AND", t.group(_settings_part(), {"Result": result, **values})["Fresh"],
-                      geometry["Fresh"], layers),
+                      geometry["Fresh"], layers, normals),
             t.boolean("AND", geometry["Topology"], layers))
 
 
@@ -61,6 +65,16 @@ def _geometry_part():
         t.link(topology, gout["Topology"])
     return node_parts.ensure("Geometry Fresh", [("Base", _GEO), ("Result", _GEO)],
                              [("Fresh", _BOOL), ("Topology", _BOOL)], build)
+
+
+def _normals_part():
+    """Inputs: base, result and Use Custom Normals: the normals are checked only then (a
+    lazy Switch: Blender computes no normals otherwise)."""
+    def build(t, gin, gout):
+        t.link(t.switch("BOOLEAN", gin["Use"], True,
+                        normals_fresh(t, gin["Base"], gin["Result"])), gout["Fresh"])
+    return node_parts.ensure("Normals Fresh", [("Base", _GEO), ("Result", _GEO), ("Use", _BOOL)],
+                             [("Fresh", _BOOL)], build)
 
 
 def _layers_part():
@@ -103,6 +117,19 @@ def positions_fresh(t, base, result):
     return t.none_differ(base, "POINT", _differs(
         t, "VECTOR", position,
         t.sample(result, ids.SNAP_POSITION, "FLOAT_VECTOR", "POINT", t.index())))
+
+
+def _normal(t):
+    """The Normal node's output (on points: the mesh's ``vertex_normals``, custom normals
+    included from Blender 4.5)."""
+    return t.node("GeometryNodeInputNormal").outputs[0]
+
+
+def normals_fresh(t, base, result):
+    """Every vertex normal of the base equals the record's (bit for bit)."""
+    return t.none_differ(base, "POINT", _differs(
+        t, "VECTOR", _normal(t),
+        t.sample(result, ids.SNAP_NORMAL, "FLOAT_VECTOR", "POINT", t.index())))
 
 
 def topology_fresh(t, base, result):
@@ -198,14 +225,15 @@ def shown(t, result, names):
                                     gout["Geometry"])), {"Result": result, "Names": names})[0]
 
 
-def channel(t, base, table, names, kept):
+def channel(t, base, table, names, kept, normals):
     """:func:`channel_tree` as a part."""
     return t.group(node_parts.ensure(
-        "Channel", [("Base", _GEO), ("Table", _GEO), ("Names", _STR), ("Kept", _BOOL)],
+        "Channel", [("Base", _GEO), ("Table", _GEO), ("Names", _STR), ("Kept", _BOOL),
+                    ("Normals", _BOOL)],
         [("Geometry", _GEO)],
         lambda t, gin, gout: t.link(channel_tree(t, gin["Base"], gin["Table"], gin["Names"],
-                                                 gin["Kept"]), gout["Geometry"])),
-        {"Base": base, "Table": table, "Names": names, "Kept": kept})[0]
+                                                 gin["Kept"], gin["Normals"]), gout["Geometry"])),
+        {"Base": base, "Table": table, "Names": names, "Kept": kept, "Normals": normals})[0]
 
 
 def with_groups(t, result, names):
@@ -216,15 +244,19 @@ def with_groups(t, result, names):
                                        "FLOAT")[0])
 
 
-def channel_tree(t, base, table, names, kept):
+def channel_tree(t, base, table, names, kept, normals):
     """The input as passed on while no surface is shown: its positions in
-    ``ids.CHANNEL_POSITION``, in ``ids.CHANNEL_RECORD`` + k the serial of `table`'s
-    record when `kept` (the input's topology and layers are that record's), else -1 and
+    ``ids.CHANNEL_POSITION``, its vertex normals in ``ids.CHANNEL_NORMAL`` when `normals`
+    (Use Custom Normals; a Switch: not computed otherwise), in ``ids.CHANNEL_RECORD`` + k
+    the serial of `table`'s record when `kept` (the input's topology and layers are that
+    record's), else -1 and
     the face sizes in ``ids.CHANNEL_FACE_SIZE`` (a Switch: not computed when kept), and,
     for the vertex-group layers of `table`'s record, their weights in
     ``ids.CHANNEL_WEIGHT`` + i."""
     position = t.node("GeometryNodeInputPosition").outputs[0]
     geometry = t.store(base, ids.CHANNEL_POSITION, "FLOAT_VECTOR", "POINT", position)
+    geometry = t.switch("GEOMETRY", normals, geometry, t.store(
+        geometry, ids.CHANNEL_NORMAL, "FLOAT_VECTOR", "POINT", _normal(t)))
     for k, name in enumerate(ids.SERIAL_NAMES):
         serial = t.switch("INT", kept, -1, t.sample(table, name, "INT", "POINT", 0))
         geometry = t.store(geometry, f"{ids.CHANNEL_RECORD}{k}", "INT", "POINT", serial)

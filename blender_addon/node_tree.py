@@ -111,7 +111,7 @@ def build(group) -> None:
         "STRING", "NOT_EQUAL", gin.outputs["Warning"], "")), gin.outputs["Warning"], "WARNING")
     used = t.boolean("OR", repaired, t.boolean("NOT", repaired))  # (evaluates the warning)
     passed = node_fresh.channel(t, base, results["result"], gin.outputs["Attribute Names"],
-                                view_kept)
+                                view_kept, current["use_normals"])
     view = t.switch("GEOMETRY", t.boolean("AND", no_error, t.boolean("NOT", stale), used),
                     passed, _shown(t, gin, results["result"]))
     render_fresh = _fresh(t, gin, base, results["render_result"], current,

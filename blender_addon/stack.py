@@ -7,11 +7,12 @@ Reading it never touches the user's mesh (mesh_io): it comes from
 
 * the final mesh, when every enabled modifier below GERBS only moves vertices
   (``ids.DEFORM_ONLY``: Armature, Lattice, ...) or there is none: while the node
-  group shows no surface it passes its input on with the positions (and
-  vertex-group weights) it received copied into hidden attributes
-  (node_fresh.channel), which those modifiers leave alone; while it shows a result
-  the final mesh carries no such attribute and the input is the result's record
-  (the node group checked it equal);
+  group shows no surface it passes its input on with the positions (its vertex
+  normals with Use Custom Normals, and its vertex-group weights) it received copied
+  into hidden attributes (node_fresh.channel), which those modifiers leave alone (the
+  final mesh's own normals are those of the moved positions, never read); while it
+  shows a result the final mesh carries no such attribute and the input is the
+  result's record (the node group checked it equal);
 * otherwise (a modifier below that changes the mesh, e.g. Triangulate), the mesh
   data-block as evaluated (its BMesh, copied in C, in Edit Mode): that is what the
   modifier receives only with no shape keys and no modifier above it; else the
@@ -66,12 +67,26 @@ def group_names(obj) -> list:
     return [g.name for g in obj.vertex_groups]
 
 
-def _read_final(final, groups, normals, known, record):
-    attr = final.attributes.get(ids.CHANNEL_POSITION)
+def _channel_vectors(final, name):
+    """(V, 3) float32 of the channel's POINT FLOAT_VECTOR attribute `name`, or None."""
+    attr = final.attributes.get(name)
     if attr is None or attr.domain != "POINT" or attr.data_type != "FLOAT_VECTOR":
+        return None
+    out = np.empty((len(final.vertices), 3), dtype=np.float32)
+    attr.data.foreach_get("vector", out.ravel())
+    return out
+
+
+def _read_final(final, groups, use_normals, known, record):
+    """The input from the channel on the final mesh: FRESH where it has none; None where
+    it lacks the normals asked for (evaluated with other settings than those read)."""
+    positions = _channel_vectors(final, ids.CHANNEL_POSITION)
+    if positions is None:
         return FRESH
-    positions = np.empty((len(final.vertices), 3), dtype=np.float32)
-    attr.data.foreach_get("vector", positions.ravel())
+    # the input's normals: the final mesh's own are those of the positions moved below
+    normals = _channel_vectors(final, ids.CHANNEL_NORMAL) if use_normals else None
+    if use_normals and normals is None:
+        return None
     named = _channel_serial(final)
     kept = _kept(final, groups, normals, positions, record, named)
     if kept is not None:
@@ -83,7 +98,7 @@ def _read_final(final, groups, normals, known, record):
     # mesh may carry a stale copy of that attribute (an old Apply)
     stored = named is not None and named[0] == -1
     sizes = mesh_io.read_face_ints(final, ids.CHANNEL_FACE_SIZE) if stored else None
-    inp = mesh_io.read_mesh(final, normals, positions, sizes)
+    inp = replace(mesh_io.read_mesh(final, False, positions, sizes), normals=normals)
     channel = _group_channel(known, groups)
     return inp.with_carried(attributes.read_carried(final, groups, channel))
 
@@ -102,11 +117,12 @@ def _channel_serial(final) -> tuple | None:
 
 
 def _kept(final, groups, normals, positions, record, named):
-    """`record`'s input with these positions (and normals), when the channel says the
-    input's counts, topology, material indices, edges and recorded layers equal the
-    record of that stamp (`named`: the serial the node group, which compared them, put
-    into the channel), and the mesh has the same layers and active maps; else None
-    (read everything). `record`: (input, stamp) the viewport result's state wrote, or None."""
+    """`record`'s input with these positions and `normals` (the channel's, or None), when
+    the channel says the input's counts, topology, material indices, edges and recorded
+    layers equal the record of that stamp (`named`: the serial the node group, which
+    compared them, put into the channel), and the mesh has the same layers and active
+    maps; else None (read everything). `record`: (input, stamp) the viewport result's
+    state wrote, or None."""
     if record is None or record[0] is None or record[0].carried is None:
         return None
     inp, want = record[0], snapshot.serial(record[1])
@@ -116,8 +132,7 @@ def _kept(final, groups, normals, positions, record, named):
     if (attributes.layer_keys(final, groups) != carried.keys()
             or attributes.flags_of(final) != carried.flags()):
         return None
-    return replace(inp, positions=positions,
-                   normals=mesh_io.read_normals(final) if normals else None)
+    return replace(inp, positions=positions, normals=normals)
 
 
 def _group_channel(known, groups) -> dict:
@@ -145,7 +160,8 @@ def unhonoured_message(obj, stack: Stack) -> str:
 
 def read_input(obj, mod, depsgraph, normals: bool, known=None, record=None):
     """What `mod` receives now: ``(MeshInput with carried, "")``, ``(FRESH, "")`` while it
-    shows a result, ``(None, "")`` when it is not evaluated, or ``(None, message)``.
+    shows a result, ``(None, "")`` when it is not evaluated (or was with other settings),
+    or ``(None, message)``.
     `known`: the last input read (its vertex-group layers tell the channel's names);
     `record`: (input, stamp) of the viewport result's last record write, or None: while
     the channel says only positions differ from that record, only they are read (an
