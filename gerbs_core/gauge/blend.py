@@ -170,12 +170,14 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
     st = np.sin(tau)
     same = (tau <= 1e-15) & (np.abs(pA - pB) <= 1e-15 * pA)
     a, b = roomA.astype(float).copy(), roomB.astype(float).copy()
-    ok = same.copy()
     t = np.flatnonzero(~same)
     # the factors that do not change with the widths, once per corner (the same
     # operations as inside the loop, so the same bits): half of the cosines
     rAB, rBA = pA / pB, pB / pA
     cA2, cB2 = np.cos(nA) ** 2, np.cos(nB) ** 2
+    # a side's step factor by its test (ok: x 1.0, the same bits): a gather, not np.where's
+    # branch per element on a random mask (7-9 % of the fit)
+    step = np.array([factor, 1.0])
     for _ in range(iters):
         if not t.size:
             break
@@ -189,11 +191,11 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
         stt = st[t]
         okA = W * rAB[t] * stt * gA <= allowA[t] * eA * (1 - 1e-9)
         okB = W * rBA[t] * stt * gB <= allowB[t] * eB * (1 - 1e-9)
-        good = okA & okB
-        ok[t[good]] = True
-        a[t] = np.where(okA, at, at * factor)      # (one scatter per side, same values)
-        b[t] = np.where(okB, bt, bt * factor)
-        t = t[~good]
+        a[t] = at * step.take(okA.view(np.int8))    # (one scatter per side)
+        b[t] = bt * step.take(okB.view(np.int8))
+        t = t[~(okA & okB)]
+    ok = np.ones(len(a), dtype=bool)       # certified: every corner that left the loop
+    ok[t] = False
     return a, b, ok
 
 
