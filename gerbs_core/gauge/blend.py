@@ -161,10 +161,7 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
     ``factor`` while its own condition fails (O(1) per corner and pass).
     Returns (a, b, ok)."""
     tau = np.abs(nB - nA)
-    cmax, cmin = np.maximum(cA, cB), np.minimum(cA, cB)
-    convex = (nB - nA) > 0
-    allowA = np.where(convex, cB * (1.0 / cmax - 1.0), cB * (1.0 / kappa - 1.0 / cmin))
-    allowB = np.where(convex, cA * (1.0 / cmax - 1.0), cA * (1.0 / kappa - 1.0 / cmin))
+    allowA, allowB = _allowances(nA, cA, nB, cB, kappa)
     G, GB = overshoot_profile(kernel), overshoot_profile(kernel, mirrored=True)
     n = len(G) - 1
     st = np.sin(tau)
@@ -197,6 +194,17 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
     ok = np.ones(len(a), dtype=bool)       # certified: every corner that left the loop
     ok[t] = False
     return a, b, ok
+
+
+def _allowances(nA, cA, nB, cB, kappa):
+    """(allowA, allowB) of :func:`closed_form_fit`: how far R = u~/u_X may move on each
+    side, cB (1/max(c) - 1) at a convex corner, cB (1/kappa - 1/min(c)) at a reflex one
+    (cA on side B)."""
+    cmax, cmin = np.maximum(cA, cB), np.minimum(cA, cB)
+    convex = (nB - nA) > 0
+    allowA = np.where(convex, cB * (1.0 / cmax - 1.0), cB * (1.0 / kappa - 1.0 / cmin))
+    allowB = np.where(convex, cA * (1.0 / cmax - 1.0), cA * (1.0 / kappa - 1.0 / cmin))
+    return allowA, allowB
 
 
 def _grid_index(al, n):

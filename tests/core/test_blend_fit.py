@@ -4,7 +4,8 @@ them bit for bit)."""
 import numpy as np
 import pytest
 
-from gerbs_core.gauge.blend import _grid_index, closed_form_fit, overshoot_profile
+from gerbs_core.gauge.blend import (_allowances, _grid_index, closed_form_fit,
+                                    overshoot_profile)
 from gerbs_core.kernels import ERBS
 
 KAPPA = 0.8
@@ -14,10 +15,7 @@ def _plain_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor, iter
     """The loop as first written: all corners tested every pass until both sides pass,
     a failing side times ``factor`` (np.where), ok recorded per pass."""
     tau = np.abs(nB - nA)
-    cmax, cmin = np.maximum(cA, cB), np.minimum(cA, cB)
-    convex = (nB - nA) > 0
-    allowA = np.where(convex, cB * (1.0 / cmax - 1.0), cB * (1.0 / kappa - 1.0 / cmin))
-    allowB = np.where(convex, cA * (1.0 / cmax - 1.0), cA * (1.0 / kappa - 1.0 / cmin))
+    allowA, allowB = _allowances(nA, cA, nB, cB, kappa)
     G, GB = overshoot_profile(kernel), overshoot_profile(kernel, mirrored=True)
     n = len(G) - 1
     a, b = roomA.astype(float).copy(), roomB.astype(float).copy()
