@@ -161,21 +161,20 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
     ``factor`` while its own condition fails (O(1) per corner and pass).
     Returns (a, b, ok)."""
     tau = np.abs(nB - nA)
-    cmax, cmin = np.maximum(cA, cB), np.minimum(cA, cB)
-    convex = (nB - nA) > 0
-    allowA = np.where(convex, cB * (1.0 / cmax - 1.0), cB * (1.0 / kappa - 1.0 / cmin))
-    allowB = np.where(convex, cA * (1.0 / cmax - 1.0), cA * (1.0 / kappa - 1.0 / cmin))
+    allowA, allowB = _allowances(nA, cA, nB, cB, kappa)
     G, GB = overshoot_profile(kernel), overshoot_profile(kernel, mirrored=True)
     n = len(G) - 1
     st = np.sin(tau)
     same = (tau <= 1e-15) & (np.abs(pA - pB) <= 1e-15 * pA)
     a, b = roomA.astype(float).copy(), roomB.astype(float).copy()
-    ok = same.copy()
     t = np.flatnonzero(~same)
     # the factors that do not change with the widths, once per corner (the same
     # operations as inside the loop, so the same bits): half of the cosines
     rAB, rBA = pA / pB, pB / pA
     cA2, cB2 = np.cos(nA) ** 2, np.cos(nB) ** 2
+    # a side's step factor by its test (ok: x 1.0, the same bits): a gather, not np.where's
+    # branch per element on a random mask (7-9 % of the fit)
+    step = np.array([factor, 1.0])
     for _ in range(iters):
         if not t.size:
             break
@@ -189,12 +188,23 @@ def closed_form_fit(nA, pA, cA, nB, pB, cB, roomA, roomB, kappa, kernel, factor,
         stt = st[t]
         okA = W * rAB[t] * stt * gA <= allowA[t] * eA * (1 - 1e-9)
         okB = W * rBA[t] * stt * gB <= allowB[t] * eB * (1 - 1e-9)
-        good = okA & okB
-        ok[t[good]] = True
-        a[t] = np.where(okA, at, at * factor)      # (one scatter per side, same values)
-        b[t] = np.where(okB, bt, bt * factor)
-        t = t[~good]
+        a[t] = at * step.take(okA.view(np.int8))    # (one scatter per side)
+        b[t] = bt * step.take(okB.view(np.int8))
+        t = t[~(okA & okB)]
+    ok = np.ones(len(a), dtype=bool)       # certified: every corner that left the loop
+    ok[t] = False
     return a, b, ok
+
+
+def _allowances(nA, cA, nB, cB, kappa):
+    """(allowA, allowB) of :func:`closed_form_fit`: how far R = u~/u_X may move on each
+    side, cB (1/max(c) - 1) at a convex corner, cB (1/kappa - 1/min(c)) at a reflex one
+    (cA on side B)."""
+    cmax, cmin = np.maximum(cA, cB), np.minimum(cA, cB)
+    convex = (nB - nA) > 0
+    allowA = np.where(convex, cB * (1.0 / cmax - 1.0), cB * (1.0 / kappa - 1.0 / cmin))
+    allowB = np.where(convex, cA * (1.0 / cmax - 1.0), cA * (1.0 / kappa - 1.0 / cmin))
+    return allowA, allowB
 
 
 def _grid_index(al, n):
