@@ -67,7 +67,7 @@ class Carried:
         return tuple(layer.key for layer in self.layers)
 
     def same(self, other) -> bool:
-        """Same layers with the same values (bit for bit) and the same active maps (the
+        """Same layers with equal values (as floats: -0.0 == +0.0) and the same active maps (the
         same object: the node group found its values equal, stack.read_input)."""
         if other is self:
             return True

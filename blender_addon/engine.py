@@ -32,7 +32,8 @@ surface (node_tree.py). Errors of a render build are kept for the panel and do
 not touch the viewport.
 
 Invalid input never touches the base mesh: the core raises a
-``GERBSValueError`` naming the problem and the indices, the message is put on
+``GERBSValueError`` naming the problem and the indices (a NaN or infinite carried
+value is refused before anything is built: finite.py), the message is put on
 the modifier (shown as its error, base mesh passed through) and returned; the
 problem's elements are kept for the select operator.
 
@@ -53,7 +54,7 @@ import numpy as np
 
 from . import creases as creases_mod
 from . import geometry_nodes as gn
-from . import mesh_io, results, snapshot, stack
+from . import finite, mesh_io, results, snapshot, stack
 from . import settings as settings_mod
 from .build import build_surface, write_carried, write_geometry
 from .errors import PREFIX, format_error, format_warnings
@@ -270,6 +271,13 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     if inp is None:
         return _fail(obj, mod, key, blank, f"{PREFIX}internal error: the result shown "
                      f"carries no record of its input", progress, render=render)
+    # a NaN or infinite carried value would be recorded and never compare equal (finite.py);
+    # an input carrying the state's own layers was checked when it was read
+    if st is None or st.input is None or inp.carried is not st.input.carried:
+        bad = finite.non_finite(inp)
+        if bad is not None:
+            return _fail(obj, mod, key, blank, format_error(bad), progress, problem=bad,
+                         render=render)
     if force and not render:
         _states.pop(state_key(obj, mod, True), None)  # renders rebuild too
     # creases (blender_addon/creases.py) from what the modifier receives: in the settings

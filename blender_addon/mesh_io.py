@@ -56,7 +56,7 @@ class MeshInput:
                 and (self.corners is other.corners or np.array_equal(self.corners, other.corners)))
 
     def same_geometry(self, other) -> bool:
-        """Positions, topology and normals equal (bit for bit; NaN never equals): the
+        """Positions, topology and normals equal (as floats: -0.0 == +0.0, NaN never): the
         surface is the same (what it carries may still differ). An input is the same as
         itself (its record, NaN or not, is what the node group found equal)."""
         if other is self:

@@ -112,7 +112,8 @@ def _differs(t, compare, value, stored):
 
 
 def positions_fresh(t, base, result):
-    """Every position of the base equals the record's (bit for bit; a NaN never does)."""
+    """Every position of the base equals the record's, as floats compare (-0.0 equals
+    +0.0; a NaN or an infinity never equals, :func:`_differs`)."""
     position = t.node("GeometryNodeInputPosition").outputs[0]
     return t.none_differ(base, "POINT", _differs(
         t, "VECTOR", position,
@@ -126,7 +127,8 @@ def _normal(t):
 
 
 def normals_fresh(t, base, result):
-    """Every vertex normal of the base equals the record's (bit for bit)."""
+    """Every vertex normal of the base equals the record's, as floats compare (as
+    :func:`positions_fresh`)."""
     return t.none_differ(base, "POINT", _differs(
         t, "VECTOR", _normal(t),
         t.sample(result, ids.SNAP_NORMAL, "FLOAT_VECTOR", "POINT", t.index())))

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import textwrap
 
-from . import ids
+from . import finite, ids
 from .errors import PREFIX
 
 _PLAIN = {
@@ -26,6 +26,7 @@ _PLAIN = {
     "outlier_vertex": "{n} stray vertex{es} far away from the rest",
     "zero_length_edge": "{n} edge{s} of zero length (merge by distance)",
     "empty": "no faces",
+    "non_finite_attribute": "a NaN or infinite value in {layer} at {n} {elements}",
 }
 
 
@@ -35,8 +36,11 @@ def headline(message: str, problem=None) -> str:
         count = len(problem.edges) if getattr(problem, "edges", None) else \
             len(problem.indices) or 1
         one = count == 1
-        text = _PLAIN[problem.problem].format(n=count, s="" if one else "s",
-                                              es="" if one else "es")
+        element = getattr(problem, "element", "")
+        text = _PLAIN[problem.problem].format(
+            n=count, s="" if one else "s", es="" if one else "es",
+            layer=f'"{getattr(problem, "layer", "")}"',
+            elements=element if one or not element else finite.plural(element))
         return f"The mesh has {text}."
     text = message.removeprefix(PREFIX)
     return text[:1].upper() + text[1:]
@@ -59,6 +63,8 @@ def selection(problem) -> dict:
         out["edge"] = [tuple(int(i) for i in e) for e in edges]
     elif problem.element in out and problem.indices:
         out[problem.element] = [int(i) for i in problem.indices]
+    elif getattr(problem, "faces", None):  # e.g. the faces of corners (finite.non_finite)
+        out["face"] = [int(i) for i in problem.faces]
     return out
 
 

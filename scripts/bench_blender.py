@@ -54,6 +54,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
+from bench_edit import edit_mode, evaluated_positions  # noqa: E402  (after the path)
+
 
 def median_time(fn, repeats):
     times = []
@@ -93,15 +95,6 @@ def make_objects(bpy, large: bool):
     if large:
         objects["tri 35k"] = height_field(bpy, 188, "tri35k")
     return objects
-
-
-def evaluated_positions(bpy, obj):
-    dg = bpy.context.evaluated_depsgraph_get()
-    dg.update()
-    mesh = obj.evaluated_get(dg).data
-    buf = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
-    mesh.vertices.foreach_get("co", buf)  # the evaluated copy (Edit Mode: the cage)
-    return buf
 
 
 def subsurf_count(bpy, obj, level):
@@ -230,8 +223,6 @@ def main(argv=None) -> int:
     gn.ensure_group().use_fake_user = True  # kept through the add/remove rounds
     print(f"group: {time.perf_counter() - t0:.3f} s to make the node group (once per file)")
     objects = make_objects(bpy, args.large)
-    from bench_edit import edit_mode
-
     if args.edit_only:
         edit_mode(bpy, objects["tri 35k" if args.large else "suzanne"], args.repeats)
         blender_addon.unregister()
@@ -243,7 +234,7 @@ def main(argv=None) -> int:
           f"{'1vert S':>8} {'1vert G':>8} {'G/S':>5} {'1v bound':>8} {'G/S':>5} | "
           f"{'all S':>8} {'all G':>8} {'G/S':>5}")
     for name, obj in objects.items():
-        if args.edit_only or (args.only and name not in args.only):
+        if args.only and name not in args.only:
             continue
         for level in levels[name][: 1 if args.quick else 2]:
             n_sub, n_g, r, rows = bench_pair(bpy, obj, level, args.repeats)

@@ -80,7 +80,6 @@ def test_fast_path_reuses_stencil_and_matches_rebuild(blender):
     assert np.abs(P_fast - want).max() <= 1e-6
 
 
-
 def test_a_layer_added_with_a_move_shows_the_surface_at_once(blender):
     """Object Mode, Rest Shape Bound: an attribute added and a vertex moved in one update
     (the stencil's update with new layer names on the modifier): the evaluation that synced
@@ -100,6 +99,7 @@ def test_a_layer_added_with_a_move_shows_the_surface_at_once(blender):
     offsets, corners = topology(obj.data)
     want = BlendingSurface(X2, faces_from_csr(offsets, corners), rest_positions=X).tessellate(R)[0]
     assert np.abs(P - want).max() <= 1e-5 and np.abs(P - P0).max() > 1e-3
+
 
 def test_topology_change_rebuilds(blender):
     from blender_addon import api
