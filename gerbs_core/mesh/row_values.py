@@ -86,7 +86,7 @@ def row_sums(w):
     n = w.shape[-1]
     if n >= 8 or n == 0:
         return w.sum(-1)
-    out = w[..., 0].copy()
+    out = w[..., 0] + 0.0       # numpy's sum starts from +0.0: a row of -0.0 sums to +0.0
     for k in range(1, n):
         out += w[..., k]
     return out

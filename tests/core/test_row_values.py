@@ -24,3 +24,10 @@ def test_a_reordered_sum_would_be_caught():
     rng = np.random.default_rng(0)
     w = rng.normal(size=(500, 3)) * 10.0 ** rng.integers(-5, 5, size=(500, 3))
     assert not np.array_equal(w[:, 0] + (w[:, 1] + w[:, 2]), row_sums(w))
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 7, 8])
+def test_row_sums_of_negative_zeros_are_positive_zero_like_numpys(n):
+    w = np.full((4, n), -0.0)
+    assert np.array_equal(np.signbit(row_sums(w)), np.signbit(w.sum(-1)))
+    assert not np.signbit(row_sums(w)).any()
