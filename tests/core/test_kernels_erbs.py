@@ -242,7 +242,9 @@ def test_stored_default_tables_are_the_build_bit_for_bit(tmp_path):
     from gerbs_core.kernels.erbs_table import build_tables
     import os
     stored = erbs_store.load()
-    assert stored is not None, "gerbs_core/kernels/erbs_default.npy missing: erbs_store.regenerate()"
+    assert stored is not None, ("gerbs_core/kernels/erbs_default.npy missing or stale (made "
+                                "by another version of the builder's code): run "
+                                "erbs_store.regenerate() with OPENBLAS_NUM_THREADS=1")
     if os.environ.get("OPENBLAS_NUM_THREADS") != "1":
         pytest.skip("the build is bit-reproducible with OPENBLAS_NUM_THREADS=1 (erbs_store.regenerate)")
     built = build_tables.__wrapped__(ERBS, erbs_store.DEFAULT)
