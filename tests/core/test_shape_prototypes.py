@@ -21,7 +21,8 @@ VARIANTS = [("immersion", "variant"), ("adaptive_coupling", "variant"),
             ("grad_tension", "with_ridges"),
             ("chart_angles", "cap135_obtuse"), ("chart_angles", "cap120"),
             ("cover_knobs", "kappa90_shrink97"), ("turned_planes", "t90"),
-            ("pinned_planes", "p75")]
+            ("pinned_planes", "p75"),
+            ("sharp_mu", "sp450t70")]
 
 
 @pytest.fixture(scope="module")
@@ -85,3 +86,20 @@ def test_fold_cover_prototype_leaves_holes(suzanne, monkeypatch):
     V, F = suzanne
     with pytest.raises(InvalidParameterError, match="holes"):
         fc.variant(V, F, 8, exact=False)
+
+
+def test_sharp_mu_prototype_is_the_rule_mu_when_constant(suzanne, monkeypatch):
+    """The per-row mu (scripts/shape/proto/sharp_mu.py) rescales the rows' weights and
+    sharpness instead of copying the coupling: with one mu everywhere it is that rule's
+    surface (to round-off), and with mu 450 on the spread stars only it differs."""
+    import gerbs_core
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    S = importlib.import_module("shape.proto.sharp_mu")
+    from shape import methods
+    V, F = suzanne
+    ref = methods.gerbs_samples(V, F, 2, exact=False,
+                                fairness=gerbs_core.FairnessRule(mu=450.0))["points"]
+    const = S.variant_of(S.patched, mu_smooth=450.0, mu_sharp=450.0)(V, F, 2, exact=False)
+    assert np.abs(const["points"] - ref).max() < 1e-10
+    base = methods.gerbs_samples(V, F, 2, exact=False)["points"]
+    assert np.abs(S.sp450t70(V, F, 2, exact=False)["points"] - base).max() > 1e-4
