@@ -254,8 +254,8 @@ def first_minimum(E: np.ndarray, tie: float = TIE) -> np.ndarray:
 
 
 def _choose(cands, X, smp, rule, V, penalty, coefs=None):
-    """The candidate of every vertex (V,): least mu * agreement + lam * tension + the fold
-    ``penalty`` (SC, ncand) (rest shape); coefs: the candidates' coefficients at X (made
+    """The candidate of every vertex (V,): least agreement + lam * tension + the fold
+    ``penalty`` (SC, ncand) (rest shape; mu weighs only the coupling, not the choice); coefs: the candidates' coefficients at X (made
     here if not given). An aliased candidate (:attr:`~gerbs_core.mesh.fits.CandidateFits.alias`)
     is evaluated on its own rows only; at the vertices it shares with its source j its
     energy is j's, as its evaluation would give it bit for bit (the same values), so the
