@@ -177,6 +177,14 @@ def sync(obj, mod, depsgraph, *, force: bool = False, progress=None) -> SyncResu
     """
     if not may_write(depsgraph):
         return SyncResult("unchanged")
+    if not gn.is_current_group(mod.node_group):
+        # written like the layer names a handler sync sets (a post-evaluation write, then
+        # a tag); this depsgraph shows the old group: sync again once it is evaluated
+        message = gn.upgrade_on_sync(obj, mod)
+        if message:
+            return SyncResult("error", message)
+        obj.update_tag()
+        return SyncResult("unchanged", retry=True)
     result = _sync(obj, mod, depsgraph, force, progress or silent)
     stats[result.status] += 1
     return result

@@ -33,6 +33,7 @@ import bpy
 
 from . import ids, node_tree
 from . import settings as settings_mod
+from .errors import PREFIX
 
 
 def is_gerbs_group(group) -> bool:
@@ -183,6 +184,22 @@ def set_error(mod, message: str, socket: str = "error") -> bool:
         return False
     mod[key] = message
     return True
+
+
+def upgrade_on_sync(obj, mod) -> str:
+    """Move `mod` to the current group when a sync meets an older one (an object appended
+    after the file's load: only load, undo and register upgrade; an older group may lack
+    the channel's normals, which the sync needs). "" when done or nothing to do (the caller
+    re-evaluates); else the error for a modifier that cannot change (a linked object)."""
+    if not is_gerbs_group(mod.node_group) or is_current_group(mod.node_group):
+        return ""
+    if obj.is_editable:
+        upgrade(mod)
+        return ""
+    return (f"{PREFIX}the node group {mod.node_group.name!r} is of an older version of the "
+            f"add-on (v{mod.node_group.get(ids.GROUP_TAG)}, this one needs "
+            f"v{ids.GROUP_VERSION}) and the object is linked: re-open its file with this "
+            f"version, or make the object local")
 
 
 def upgrade(mod) -> bool:

@@ -227,6 +227,10 @@ def sync_now(obj, *, force: bool = False, progress=None):
     _busy = True
     try:
         outcome = engine.sync_object(obj, depsgraph, force=force, progress=progress)
+        if any(r.retry for r in outcome):  # e.g. moved to the current node group
+            depsgraph = bpy.context.evaluated_depsgraph_get()
+            depsgraph.update()
+            outcome = engine.sync_object(obj, depsgraph, force=force, progress=progress)
         if key is not None:
             _record(key, obj.name, [r.message for r in outcome if r.status == "error"])
         _show_errors()

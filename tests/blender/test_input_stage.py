@@ -132,6 +132,8 @@ def test_custom_normals_come_from_the_modifiers_input(blender, where):
         assert np.abs(_vertex_normals(final)[: len(N)] - N).max() > 0.1
 
 
+@pytest.mark.skipif(bpy.app.version < (4, 5, 0), reason="before Blender 4.5 vertex_normals "
+                    "ignore custom normals: a custom-normals edit changes no input normal")
 @pytest.mark.parametrize("where", ["after", "before", "none"])
 def test_editing_only_the_custom_normals_rebuilds(blender, where):
     """Use Custom Normals: a normals edit alone (no position moves) must not leave the

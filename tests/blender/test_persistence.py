@@ -281,3 +281,92 @@ def test_the_nested_groups_of_an_older_version_are_rebuilt_and_removed_on_load(b
     assert {g.name for g in bpy.data.node_groups if node_parts.is_part(g)} == used
     P = evaluated(obj)
     assert len(P) > len(obj.data.vertices) and np.abs(P[:42] - positions(obj.data)).max() <= 1e-6
+
+
+def _without_normals_channel(mod):
+    """Give `mod` an older group version whose channel passes no input normals (as groups
+    before Use Custom Normals went through the channel): copies of the group and of its
+    channel part, the part storing the normals under another name."""
+    from blender_addon import ids
+    from blender_addon import geometry_nodes as gn
+
+    old = mod.node_group.copy()
+    old[ids.GROUP_TAG] = ids.GROUP_VERSION - 1
+    stripped = 0
+    for node in old.nodes:
+        if node.bl_idname != "GeometryNodeGroup" or node.node_tree is None:
+            continue
+        for inner in node.node_tree.nodes:
+            if (inner.bl_idname == "GeometryNodeStoreNamedAttribute"
+                    and inner.inputs["Name"].default_value == ids.CHANNEL_NORMAL):
+                part = node.node_tree.copy()
+                part[ids.PART_VERSION] = ids.GROUP_VERSION - 1
+                part.nodes[inner.name].inputs["Name"].default_value = ".gerbs_old_unused"
+                node.node_tree = part
+                stripped += 1
+                break
+    assert stripped == 1
+    mod.node_group = old
+    gn.write_settings(mod, resolution=2, use_normals=True)
+
+
+def _older_group_file(path):
+    """Save to `path` an icosphere with Use Custom Normals, a twist below and an older
+    group without the normals channel (the add-on unregistered meanwhile: a sync would
+    upgrade it), then start an empty file. (the object's name, `path`)."""
+    import blender_addon
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    mod = api.add_surface(obj, resolution=2, use_normals=True)
+    twist = obj.modifiers.new("Twist", "SIMPLE_DEFORM")
+    twist.deform_method, twist.angle = "TWIST", 1.5
+    name = obj.name
+    blender_addon.unregister()
+    try:
+        _without_normals_channel(mod)
+        bpy.ops.wm.save_as_mainfile(filepath=str(path))
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+    finally:
+        blender_addon.register()
+    return name, path
+
+
+def test_an_appended_object_of_an_older_group_without_the_normals_channel_updates(blender,
+                                                                                  tmp_path):
+    """Only load, undo and register move modifiers to the current group; an object appended
+    later with an older group (Use Custom Normals on, a deform below: the input comes from
+    the channel, which lacks its normals) is moved on its first sync: after a vertex move
+    the surface is that of the moved mesh (before: the base mesh for good, no message)."""
+    from blender_addon import api, engine
+    from blender_addon import geometry_nodes as gn
+
+    name, path = _older_group_file(tmp_path / "old_normals.blend")
+    bpy.ops.wm.append(directory=f"{path}/Object/", filename=name)
+    obj = bpy.data.objects[name]
+    evaluated(obj)
+    obj.data.vertices[3].co.z += 0.3
+    obj.data.update()
+    evaluated(obj)
+    out = api.update(obj)
+    mod = obj.modifiers[0]
+    st = engine.get_state(obj, mod)
+    assert np.abs(st.input.positions - positions(obj.data)).max() <= 1e-6  # the moved mesh
+    assert len(evaluated(obj)) > len(obj.data.vertices)  # a surface, not the base mesh
+    assert [r.status for r in out] != ["error"] and api.status(obj)["error"] == ""
+    assert gn.is_current_group(mod.node_group)
+
+
+def test_a_linked_object_of_an_older_group_reports_why_it_cannot_update(blender, tmp_path):
+    """A linked object's modifier cannot move to the current group: the sync says so (an
+    error naming the group and what to do) instead of silently showing a stale mesh."""
+    from blender_addon import api, handlers
+
+    name, path = _older_group_file(tmp_path / "old_linked.blend")
+    bpy.ops.wm.link(directory=f"{path}/Object/", filename=name)
+    obj = bpy.data.objects[name]
+    assert obj.library is not None
+    out = api.update(obj, raise_errors=False)
+    assert [r.status for r in out] == ["error"]
+    assert "older version" in out[0].message and "make the object local" in out[0].message
+    assert "older version" in (handlers.status_message or "")
