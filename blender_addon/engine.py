@@ -46,8 +46,6 @@ from __future__ import annotations
 
 import logging
 import time
-from collections import Counter
-from dataclasses import dataclass
 
 import bpy
 import numpy as np
@@ -60,42 +58,11 @@ from .build import build_surface, write_carried, write_geometry
 from .errors import PREFIX, format_error, format_warnings
 from .progress import silent
 from .stencil_update import apply_stencil
+from .states import (  # noqa: F401  (engine.SurfaceState, engine.stats, ... for callers)
+    SurfaceState, SyncResult, get_state, known, prune, state_key, stats)
+from .states import states as _states
 
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class SurfaceState:
-    """What was last built for one result (numpy only)."""
-
-    settings: tuple
-    input: mesh_io.MeshInput
-    positions: np.ndarray  # (V, 3) float64 of input.positions
-    stencil: object = None  # gerbs_core.mesh.stencil.Stencil (P points from V positions)
-    rest: np.ndarray | None = None  # (V, 3) the rest shape the stencil is bound to
-    transfer: object = None  # transfer.Transfer: the output's maps of carried layers
-    points: np.ndarray | None = None  # (P, 3) float64 last output (for partial updates)
-    points32: np.ndarray | None = None  # (P, 3) float32 the same, as written to the result
-    record: tuple = ()  # the settings record written with the result
-    stamp: str = ""  # snapshot.stamp of the record this state last wrote ("" none/failed)
-    partial_updates: int = 0
-    n_points: int = 0
-    n_faces: int = 0  # output faces (quads in quad faces, triangles elsewhere)
-    n_triangles: int = 0  # triangles of the same surface triangulated (e.g. as exported)
-    result_uid: int = -1
-    error: str = ""
-    problem: object = None  # the InvalidMeshError behind `error` (select operator)
-    build_seconds: float = 0.0
-    update_seconds: float = 0.0
-    warnings: tuple = ()  # gerbs_core.mesh.repair.MeshWarning of the last build
-
-
-@dataclass(frozen=True)
-class SyncResult:
-    status: str  # "unchanged" | "updated" | "rebuilt" | "error"
-    message: str = ""
-    rebind: bool = False  # a linear preview of a Follow surface: rebuild when edits settle
-    retry: bool = False  # the node group was made to pass its input on: sync again soon
 
 
 def dragging(obj) -> bool:
@@ -104,35 +71,10 @@ def dragging(obj) -> bool:
     return obj.mode == "EDIT" and not bpy.app.background
 
 
-_states: dict[tuple, SurfaceState] = {}
-stats: Counter = Counter()  # how often each SyncResult status occurred (tests, panel)
-
-
-def state_key(obj, mod, render: bool = False) -> tuple:
-    key = (obj.session_uid, getattr(mod, "persistent_uid", mod.name))  # (name before 4.2)
-    return key + ("render",) if render else key
-
-
-def get_state(obj, mod, render: bool = False) -> SurfaceState | None:
-    return _states.get(state_key(obj, mod, render))
-
-
-def known(obj) -> bool:
-    """Has any modifier of `obj` been synced (so it may leave garbage behind)?"""
-    uid = obj.session_uid
-    return any(key[0] == uid for key in _states)
-
-
 def clear_caches() -> None:
     """Forget every cache (file load, unregister); results rebuild on demand."""
     _states.clear()
     results.clear()
-
-
-def prune(alive_keys) -> None:
-    """Drop the states of modifiers that no longer exist (render states with them)."""
-    for key in [k for k in _states if k[:2] not in alive_keys]:
-        del _states[key]
 
 
 def set_error(obj, mod, message: str, warning: str = "") -> None:
