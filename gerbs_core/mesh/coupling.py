@@ -265,10 +265,15 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     # coefficients): Bu (SC, V MMAX) csr and the scaled Bs^T (V MMAX, SC) csc, built
     # directly in compressed form (no coo sort: these are the largest matrices)
     active = np.arange(mmax)[None, :] < n_monomials(np.asarray(degrees))[smp.vertex][:, None]
-    cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active]
-    ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))])
-    Bu = sp.csr_matrix((smp.Bu[active], cols, ptr), shape=(SC, V * mmax))
-    BsT = sp.csc_matrix((smp.Bs[active], cols, ptr), shape=(V * mmax, SC))
+    # (one pattern: int32 index arrays shared by both matrices, not a copy each)
+    idx = np.int32 if max(V * mmax, active.size) < 2 ** 31 - 1 else np.int64
+    cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active].astype(idx)
+    ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))]).astype(idx)
+    bu = smp.Bu[active]
+    Bu = sp.csr_matrix((bu, cols, ptr), shape=(SC, V * mmax))
+    # Bs = Bu / h_v^|m| entry by entry (the values of smp.Bs, without its dense array)
+    BsT = sp.csc_matrix((bu / smp.hpow.ravel()[cols], cols, ptr), shape=(V * mmax, SC))
+    del bu, active
     # per vertex normal matrices of data + agreement + tension (block diagonal B^T W B)
     N = normals.copy()
     G2 = (BsT @ sp.diags(wa + wt) @ BsT.T).tocoo()
