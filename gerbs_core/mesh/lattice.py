@@ -238,7 +238,15 @@ class Lattice:
 
     @cached_property
     def _sample_params(self):
-        """(uv (P, 2), fan (P,)) of every output sample."""
+        """(uv (P, 2), fan (P,)) of every output sample (cached: :attr:`uv`, :attr:`fan`)."""
+        return self.sample_params()
+
+    def sample_params(self):
+        """(uv (P, 2), fan (P,)) of every output sample, the cached ones if made, else made
+        anew and not kept (24 bytes a sample: a stencil's assembly needs them once, and a
+        stencil keeps its lattice)."""
+        if "_sample_params" in self.__dict__:
+            return self.__dict__["_sample_params"]
         uv_g = np.empty((self.n_points, 2))
         fan_g = np.empty(self.n_points, dtype=np.int64)
         for fk, G, own, n in self.size_classes:
