@@ -198,10 +198,11 @@ def _apply(chosen, p, sweeps, d, Y, proj=None):
     # as the expressions in the comments, with fewer (SC, k) arrays alive at once)
     Xs = p["rows"] @ Y                                   # X_v of every row
     # fixed = rhs Y + BsT (Wt (cage Y - Xs) - Wa Xs)
-    fixed = _sum(p["rhs"] @ Y, p["BsT"] @ _diff(p["Wt"] @ _diff(p["cage"] @ Y, Xs),
-                                                p["Wa"] @ Xs))
+    fixed = p["BsT"] @ _diff(p["Wt"] @ _diff(p["cage"] @ Y, Xs), p["Wa"] @ Xs)
+    del Xs        # (made again in each sweep: one array fewer alive there)
+    fixed = _sum(p["rhs"] @ Y, fixed)
     for _ in range(sweeps):
-        l = _sum(Xs, p["Bu"] @ c)                         # l_v at the rows' samples
+        l = _sum(p["rows"] @ Y, p["Bu"] @ c)              # l_v = X_v + B c at the rows
         # new = blk (fixed + BsT (Dp T - Dpp l)), T = gather agg l the sum of the sample's P l
         u = _diff(p["Dp"] @ (p["gather"] @ (p["agg"] @ l)), p["Dpp"] @ l)
         del l
