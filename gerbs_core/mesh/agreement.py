@@ -137,8 +137,10 @@ def face_sharpness(topo, X, sharp_from: float, sharp_to: float) -> np.ndarray:
 @dataclass(frozen=True)
 class _Samples:
     """The energies' sample-corner pairs (SC rows): sample p, vertex v, Psi, sharpness s,
-    unscaled monomials Bu (SC, MMAX) and scaled Bs = Bu * h_v^-|m|; cage weights; the
-    rows' chart positions y (SC, 2) and faces."""
+    unscaled monomials Bu (SC, MMAX), the scales' powers hpow (V, MMAX) = h_v^|m| (the
+    scaled monomials Bs = Bu / h_v^|m| are made where needed: (SC, MMAX) float64 each,
+    the largest arrays of the model's build); cage weights; the rows' chart positions
+    y (SC, 2) and faces."""
 
     sample: np.ndarray
     vertex: np.ndarray
@@ -147,10 +149,15 @@ class _Samples:
     psi: np.ndarray
     sharp: np.ndarray
     Bu: np.ndarray
-    Bs: np.ndarray
+    hpow: np.ndarray
     weight: np.ndarray   # quadrature weight (face area share / h_v^2)
     cage: sp.csr_matrix  # (L, V): the cage point of every sample
     n_samples: int
+
+    @property
+    def Bs(self) -> np.ndarray:
+        """(SC, MMAX) the scaled monomials Bu / h_v^|m| (made on each use)."""
+        return self.Bu / self.hpow[self.vertex]
 
 
 def _shepard_weights(topo, corners2d, face, x):
@@ -203,7 +210,7 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     y = np.concatenate([p[3] for p in parts])
     Bu = monomials(y, DMAX)[0]
     deg = monomial_exponents(DMAX).sum(1)
-    Bs = Bu / (h[:, None] ** deg[None, :])[vertex]          # the powers once per vertex
+    hpow = h[:, None] ** deg[None, :]                       # the powers once per vertex
     slot_rows = np.repeat(np.arange(L), cw.shape[1])
     slot_cols = topo.face_vertices[np.minimum(topo.face_offsets[lf][:, None] + np.arange(cw.shape[1]),
                                               topo.face_offsets[lf + 1][:, None] - 1)].ravel()
@@ -212,7 +219,7 @@ def _samples(topo, charts, corners2d, cover, h, resolution, sharp_face):
     # every face weighs the same, whatever its size (measured: weighting by area made
     # Suzanne's small faces count too little, 236 pairs above 60 degrees against 126)
     weight = 1.0 / counts[face]
-    return _Samples(sample, vertex, y, face, psi, sharp_face[face], Bu, Bs, weight, cage, L)
+    return _Samples(sample, vertex, y, face, psi, sharp_face[face], Bu, hpow, weight, cage, L)
 
 
 def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
@@ -326,6 +333,7 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
     if sharp is None:
         sharp = face_sharpness(topo, X, rule.sharp_from, rule.sharp_to)
     smp = _samples(topo, charts, corners2d, cover, rings.h, rule.resolution, sharp)
+    coefs = penalty = None
     if len(cands) > 1:
         coefs = candidate_coefs(cands, X)
         penalty = _fold_penalty(cands, X, smp, face_normals(topo, X), rings.h, rule, coefs)
@@ -333,6 +341,22 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
         choice = _choose(cands, X, smp, rule, V, penalty, coefs)
     else:
         choice = np.zeros(V, np.int64)
+    coupled = bool(rule.sweeps and (rule.mu or rule.lam))
+    degrees, chosen, normals, rhs = _chosen_fits(cands, choice, V, coupled)
+    # the candidates' operators, coefficients and penalties are not needed by the coupling:
+    # freed before it (on a 35k-vertex mesh ~0.45 GB of the model's peak)
+    del cands, extra, coefs, penalty
+    cons = None if constraints is None else constraints(degrees)
+    if not coupled:
+        proj = None if cons is None else cons.projection(normals, rings.h, degrees, MMAX)
+        return degrees, identity_fits(chosen, proj)
+    return degrees, coupled_fits(chosen, rhs, normals, degrees, smp, rule, rings.h, DMAX,
+                                 cons)
+
+
+def _chosen_fits(cands, choice, V, coupled):
+    """(degrees (V,), chosen (V MMAX, V), normals (V, MMAX, MMAX), rhs (V MMAX, V) or None
+    without coupling) of every vertex's chosen candidate ``choice`` (V,)."""
     degrees = np.array([c.degree for c in cands])[choice]
     chosen = _chosen(cands, choice, "matrix", V)
     normals = np.zeros((V, MMAX, MMAX))
@@ -340,10 +364,5 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
         mine = np.flatnonzero(choice == i)
         M = n_monomials(c.degree)
         normals[mine, :M, :M] = c.normal[mine]
-    cons = None if constraints is None else constraints(degrees)
-    if not (rule.sweeps and (rule.mu or rule.lam)):
-        proj = None if cons is None else cons.projection(normals, rings.h, degrees, MMAX)
-        return degrees, identity_fits(chosen, proj)
-    rhs = _chosen(cands, choice, "rhs", V)
-    return degrees, coupled_fits(chosen, rhs, normals, degrees, smp, rule, rings.h, DMAX,
-                                 cons)
+    rhs = _chosen(cands, choice, "rhs", V) if coupled else None
+    return degrees, chosen, normals, rhs

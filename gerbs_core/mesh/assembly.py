@@ -127,8 +127,9 @@ def _degree_of(M):
     return {n_monomials(d): d for d in range(1, 8)}[M]
 
 
-def _evaluate_rows(model, face, x, ptr_b, ptr_e, by_vertex, out_b, out_e):
-    """Write the rows of the samples (face (N,), x (N, 2) in their faces) into
+def _evaluate_rows(model, face, x_of, ptr_b, ptr_e, by_vertex, out_b, out_e):
+    """Write the rows of the samples (face (N,), x_of(p0, p1) -> (p1 - p0, 2) the points of
+    samples p0..p1 in their faces: made chunk by chunk) into
     ``out_b`` = (data, cols or None) and ``out_e`` likewise at the row pointers ptr_b,
     ptr_e (N + 1,); returns max_k psi_k per sample (N,)."""
     topo, ch, cover = model.topology, model.charts, model.cover
@@ -139,7 +140,7 @@ def _evaluate_rows(model, face, x, ptr_b, ptr_e, by_vertex, out_b, out_e):
     for p0 in range(0, N, CHUNK_SAMPLES):
         p1 = min(N, p0 + CHUNK_SAMPLES)
         terms = _Terms(topo, by_vertex, face, ptr_b, p0, p1)
-        xt = x[p0:p1][terms.sample]
+        xt = x_of(p0, p1)[terms.sample]
         psi, pol = cover.psi_jet(ch, terms.corner, xt, 0)
         w, mx[p0:p1] = _partition(psi[0], terms, p1 - p0, n_max)
         t0, t1 = ptr_b[p0], ptr_b[p1]
@@ -200,7 +201,8 @@ def _shared(model, lattice, classes, by_vertex, ptr_b, ptr_e, ib, ie):
     x = map_points(topo, np.asarray(model.layouts.corners, dtype=np.float64), face, fan, uv)
     qb, qe = _row_layout(topo, deg, face)
     tab_b, tab_e = np.empty(qb[-1]), np.empty(qe[-1])
-    mx = _evaluate_rows(model, face, x, qb, qe, by_vertex, (tab_b, None), (tab_e, None))
+    mx = _evaluate_rows(model, face, lambda p0, p1: x[p0:p1], qb, qe, by_vertex,
+                        (tab_b, None), (tab_e, None))
     sface = lattice.face
     sorted_vertex = topo.face_vertices[by_vertex].astype(ib)
     Mc = n_monomials(deg[topo.face_vertices[by_vertex]])
@@ -232,10 +234,18 @@ def assemble(model, lattice):
         data_b, cols_b, data_e, cols_e, eps = _shared(model, lattice, classes, by_vertex,
                                                       ptr_b, ptr_e, ib, ie)
     else:
-        x = lattice.map_to_polygon(model.layouts.corners)
+        # the samples' points chunk by chunk (the same formulas per sample as
+        # lattice.map_to_polygon), from parameters not cached on the lattice: neither
+        # (P, 2) array outlives the assembly (a stencil keeps its lattice)
+        uv, fan = lattice.sample_params()
+        corners = np.asarray(model.layouts.corners, dtype=np.float64)
+
+        def x_of(p0, p1):
+            return map_points(topo, corners, face[p0:p1], fan[p0:p1], uv[p0:p1])
+
         data_b, cols_b = np.empty(ptr_b[-1]), np.empty(ptr_b[-1], dtype=ib)
         data_e, cols_e = np.empty(ptr_e[-1]), np.empty(ptr_e[-1], dtype=ie)
-        mx = _evaluate_rows(model, face, x, ptr_b, ptr_e, by_vertex, (data_b, cols_b),
+        mx = _evaluate_rows(model, face, x_of, ptr_b, ptr_e, by_vertex, (data_b, cols_b),
                             (data_e, cols_e))
         eps = float(mx.min()) if P else np.inf
     B = sp.csr_matrix((data_b, cols_b, ptr_b.astype(ib)), shape=(P, V))

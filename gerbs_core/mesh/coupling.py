@@ -170,18 +170,44 @@ def _project(proj, c, Y):
     return c
 
 
+def _sum(a, fresh):
+    """a + fresh; dense: added into ``fresh`` (a product made for it; IEEE addition is
+    commutative: the same bits). Sparse: ``a + fresh`` as written (the entries' order of
+    the result follows the operands')."""
+    if sp.issparse(fresh) or sp.issparse(a):
+        return a + fresh
+    fresh += a
+    return fresh
+
+
+def _diff(fresh, b):
+    """fresh - b; dense: in place in ``fresh`` (a product made for it)."""
+    if sp.issparse(fresh) or sp.issparse(b):
+        return fresh - b
+    fresh -= b
+    return fresh
+
+
 def _apply(chosen, p, sweeps, d, Y, proj=None):
     """The map (module docstring) with matrices ``chosen``, ``p`` applied to Y; ``proj``
     the crease constraints, imposed after the first fit and every sweep."""
     c = _project(proj, chosen @ Y, Y)
     if not sweeps:
         return c
+    # (dense Y: the sums and differences written into the fresh products, the same values
+    # as the expressions in the comments, with fewer (SC, k) arrays alive at once)
     Xs = p["rows"] @ Y                                   # X_v of every row
-    fixed = p["rhs"] @ Y + p["BsT"] @ (p["Wt"] @ (p["cage"] @ Y - Xs) - p["Wa"] @ Xs)
+    # fixed = rhs Y + BsT (Wt (cage Y - Xs) - Wa Xs)
+    fixed = p["BsT"] @ _diff(p["Wt"] @ _diff(p["cage"] @ Y, Xs), p["Wa"] @ Xs)
+    del Xs        # (made again in each sweep: one array fewer alive there)
+    fixed = _sum(p["rhs"] @ Y, fixed)
     for _ in range(sweeps):
-        l = Xs + p["Bu"] @ c                              # l_v at the rows' samples
-        T = p["gather"] @ (p["agg"] @ l)                  # sum of the sample's P l
-        new = p["blk"] @ (fixed + p["BsT"] @ (p["Dp"] @ T - p["Dpp"] @ l))
+        l = _sum(p["rows"] @ Y, p["Bu"] @ c)              # l_v = X_v + B c at the rows
+        # new = blk (fixed + BsT (Dp T - Dpp l)), T = gather agg l the sum of the sample's P l
+        u = _diff(p["Dp"] @ (p["gather"] @ (p["agg"] @ l)), p["Dpp"] @ l)
+        del l
+        new = p["blk"] @ _sum(fixed, p["BsT"] @ u)
+        del u
         c = _project(proj, (1.0 - d) * c + d * new, Y)
         if sp.issparse(c):
             c.eliminate_zeros()
@@ -242,6 +268,23 @@ def _block_diagonal(blocks):
     return sp.csr_matrix((blocks[nz], (r[nz], c[nz])), shape=(V * M, V * M))
 
 
+def _diagonal(values, one):
+    """sp.diags(values, format="csr") (its zeros dropped), the index arrays views of
+    ``one`` = arange(n + 1) when no value is zero."""
+    if not np.all(values != 0):
+        return sp.diags(values, format="csr")
+    n = len(values)
+    return sp.csr_matrix((values, one[:n], one), shape=(n, n))
+
+
+def _same_pattern(m, like):
+    """csr m with the index arrays of ``like`` when both have one pattern (no second copy)."""
+    if (m.shape == like.shape and np.array_equal(m.indptr, like.indptr)
+            and np.array_equal(m.indices, like.indices)):
+        return sp.csr_matrix((m.data, like.indices, like.indptr), shape=m.shape)
+    return m
+
+
 def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
                  constraints=None) -> CoupledFits:
     """The coupled fits (module docstring), with optional linear ``constraints``
@@ -265,10 +308,15 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     # coefficients): Bu (SC, V MMAX) csr and the scaled Bs^T (V MMAX, SC) csc, built
     # directly in compressed form (no coo sort: these are the largest matrices)
     active = np.arange(mmax)[None, :] < n_monomials(np.asarray(degrees))[smp.vertex][:, None]
-    cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active]
-    ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))])
-    Bu = sp.csr_matrix((smp.Bu[active], cols, ptr), shape=(SC, V * mmax))
-    BsT = sp.csc_matrix((smp.Bs[active], cols, ptr), shape=(V * mmax, SC))
+    # (one pattern: int32 index arrays shared by both matrices, not a copy each)
+    idx = np.int32 if max(V * mmax, active.size, L) < 2 ** 31 - 1 else np.int64
+    cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active].astype(idx)
+    ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))]).astype(idx)
+    bu = smp.Bu[active]
+    Bu = sp.csr_matrix((bu, cols, ptr), shape=(SC, V * mmax))
+    # Bs = Bu / h_v^|m| entry by entry (the values of smp.Bs, without its dense array)
+    BsT = sp.csc_matrix((bu / smp.hpow.ravel()[cols], cols, ptr), shape=(V * mmax, SC))
+    del bu, active
     # per vertex normal matrices of data + agreement + tension (block diagonal B^T W B)
     N = normals.copy()
     G2 = (BsT @ sp.diags(wa + wt) @ BsT.T).tocoo()
@@ -279,21 +327,23 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
         M = n_monomials(d)
         Pinv[vs, :M, :M] = pinned_normal_inverse(N[vs, :M, :M], d)
     Pinv = Pinv / h[:, None, None] ** deg[None, :, None]      # unscale: c = scaled / h^|m|
-    one = np.arange(SC + 1)
-    gather = sp.csr_matrix((np.ones(SC), smp.sample, one), shape=(SC, L))
+    # the one-entry-per-row matrices share their arrays (the pointers 0..SC, the column
+    # indices of the diagonals, the ones): the model keeps them for partial updates
+    one, ones = np.arange(SC + 1, dtype=idx), np.ones(SC)
+    gather = sp.csr_matrix((ones, smp.sample.astype(idx), one), shape=(SC, L))
     parts = {
         "blk": _block_diagonal(Pinv),
-        "rhs": rhs.tocsr(),
+        "rhs": _same_pattern(rhs.tocsr(), chosen.tocsr()),
         "BsT": BsT,
-        "rows": sp.csr_matrix((np.ones(SC), smp.vertex, one), shape=(SC, V)),
+        "rows": sp.csr_matrix((ones, smp.vertex.astype(idx), one), shape=(SC, V)),
         "cage": (gather @ smp.cage).tocsr(),
         "Bu": Bu,
         "gather": gather,
-        "agg": sp.csc_matrix((P, smp.sample, one), shape=(L, SC)),
-        "Wt": sp.diags(wt, format="csr"),
-        "Wa": sp.diags(wa, format="csr"),
-        "Dp": sp.diags(rule.mu * w * P, format="csr"),
-        "Dpp": sp.diags(rule.mu * w * P * P, format="csr"),
+        "agg": sp.csc_matrix((P, gather.indices, one), shape=(L, SC)),
+        "Wt": _diagonal(wt, one),
+        "Wa": _diagonal(wa, one),
+        "Dp": _diagonal(rule.mu * w * P, one),
+        "Dpp": _diagonal(rule.mu * w * P * P, one),
     }
     proj = None if constraints is None else constraints.projection(N, h, degrees, mmax)
     return CoupledFits(chosen, rule.sweeps, rule.damping, parts, proj)

@@ -113,27 +113,34 @@ def _size_class(tp, r: int, n: int, block, owner_corner, first_he) -> SizeClass:
     return SizeClass(fk, G, own, n)
 
 
-def _face_tables(classes, F: int, tcount, T: int, r: int, flip: np.ndarray):
-    """(local_sample (L,), local_offsets (F+1,), triangles (T, 3)) in face order.
+def _face_tables(classes, F: int):
+    """(local_sample (L,), local_offsets (F+1,)) in face order.
 
     The per-class tables are merged by offsets (each face is in exactly one class, in
-    template order): scatters, no sort. A class's faces of another triangulation
-    (``flip`` (F,), the variant of :func:`template_tris`) overwrite its block."""
+    template order): scatters, no sort."""
     npts = np.zeros(F, dtype=np.int64)
     for fk, G, _, _ in classes:
         npts[fk] = G.shape[1]
     loff = np.zeros(F + 1, dtype=np.int64)
     np.cumsum(npts, out=loff[1:])
-    toff = np.zeros(F + 1, dtype=np.int64)
-    np.cumsum(tcount, out=toff[1:])
     local_sample = np.empty(int(loff[-1]), dtype=np.int64)
-    tri = np.empty((T, 3), dtype=np.int64)
     for fk, G, own, n in classes:
         npt = G.shape[1]
         if len(classes) == 1:
             local_sample[:] = G.ravel()
         else:
             local_sample[(loff[fk][:, None] + np.arange(npt)).ravel()] = G.ravel()
+    return local_sample, loff
+
+
+def _face_triangles(classes, F: int, tcount, T: int, r: int, flip: np.ndarray):
+    """triangles (T, 3) in face order (merged by offsets like :func:`_face_tables`); a
+    class's faces of another triangulation (``flip`` (F,), the variant of
+    :func:`template_tris`) overwrite its block."""
+    toff = np.zeros(F + 1, dtype=np.int64)
+    np.cumsum(tcount, out=toff[1:])
+    tri = np.empty((T, 3), dtype=np.int64)
+    for fk, G, own, n in classes:
         for rows, v in variant_rows(flip[fk]):
             tris = template_tris(n, r, v)
             if len(classes) == 1 and isinstance(rows, slice):
@@ -141,7 +148,7 @@ def _face_tables(classes, F: int, tcount, T: int, r: int, flip: np.ndarray):
             else:
                 dest = (toff[fk[rows]][:, None] + np.arange(len(tris))).ravel()
                 _scatter_rows(tri, dest, G[rows][:, tris].reshape(-1, 3))
-    return local_sample, loff, tri
+    return tri
 
 
 def _check_flip(flip, sizes) -> np.ndarray:
@@ -165,7 +172,7 @@ class Lattice:
       ``face (P,)``, ``fan (P,)``, ``uv (P,2)``: evaluation face and parameters of each sample
       ``vertex_sample (V,)``: sample of each mesh vertex (= arange(V))
       ``edge_samples (E, r-1)``: interior samples of edge e from ``edges[e,0]`` to ``edges[e,1]``
-      ``triangles (T,3)``: output triangles, oriented like their faces, grouped by face
+      ``triangles (T,3)``: output triangles (made on first use), oriented like their faces, grouped by face
       ``triangle_face (T,)``: the face each output triangle lies in
       ``local_face, local_fan, local_uv, local_sample (L,)``: every lattice point of every
       face (shared points once per incident face), sorted by face, CSR ``local_offsets (F+1,)``
@@ -196,17 +203,23 @@ class Lattice:
         face_g = np.empty(P, dtype=np.int64)
         for fk, G, own, _ in classes:
             face_g[G[own]] = np.broadcast_to(fk[:, None], G.shape)[own]
-        local_sample, loff, tri = _face_tables(classes, F, tcount, T, r, self.flip)
+        local_sample, loff = _face_tables(classes, F)
         self.size_classes = classes
         self.local_sample = _ro(local_sample)
         self.local_offsets = _ro(loff)
-        self.triangles = _ro(tri)
         self._tcount = tcount
         self.face = _ro(face_g)
         self.vertex_sample = _ro(np.arange(V, dtype=np.int64))
         self.edge_samples = _ro(V + np.arange(E * (r - 1), dtype=np.int64).reshape(E, r - 1))
         self.topology, self.resolution = tp, r
         self.n_points, self.n_triangles = P, T
+
+    @cached_property
+    def triangles(self) -> np.ndarray:
+        """(T, 3) the output triangles (made on first use: 24 bytes a triangle, which a
+        stencil's assembly and W @ X never read)."""
+        return _ro(_face_triangles(self.size_classes, self.topology.n_faces, self._tcount,
+                                   self.n_triangles, self.resolution, self.flip))
 
     # faces in face order: made on first use from the counts
     @cached_property
@@ -238,7 +251,15 @@ class Lattice:
 
     @cached_property
     def _sample_params(self):
-        """(uv (P, 2), fan (P,)) of every output sample."""
+        """(uv (P, 2), fan (P,)) of every output sample (cached: :attr:`uv`, :attr:`fan`)."""
+        return self.sample_params()
+
+    def sample_params(self):
+        """(uv (P, 2), fan (P,)) of every output sample, the cached ones if made, else made
+        anew and not kept (24 bytes a sample: a stencil's assembly needs them once, and a
+        stencil keeps its lattice)."""
+        if "_sample_params" in self.__dict__:
+            return self.__dict__["_sample_params"]
         uv_g = np.empty((self.n_points, 2))
         fan_g = np.empty(self.n_points, dtype=np.int64)
         for fk, G, own, n in self.size_classes:

@@ -47,10 +47,14 @@ class Stencil:
         self.base, self.mono = _canonical(base), _canonical(mono)
         self.fits = fits
         self.lattice = lattice
-        self.triangles = lattice.triangles
         self.vertex_samples = lattice.vertex_sample
         self._csc = None
         self._moved = None  # (key, moved_columns) of the last moved vertices
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(T, 3) the lattice's output triangles (made on first use)."""
+        return self.lattice.triangles
 
     @property
     def operator(self) -> sp.csr_matrix:

@@ -33,7 +33,7 @@ import gerbs_core.mesh.assembly as asm  # noqa: E402
 import gerbs_core.mesh.evaluate as ev  # noqa: E402
 import gerbs_core.mesh.spread_fits as spf  # noqa: E402
 from gerbs_core.mesh.monomials import monomials  # noqa: E402
-from shape.proto.ridge_basis import DEG, MM, find_ridges, ridge_candidates  # noqa: E402
+from shape.proto.ridge_basis import MM, find_ridges, ridge_candidates  # noqa: E402
 
 OPTS = {"sharp": 90.0, "sharp_max": 180.0, "quads": False, "spiky": False, "allow": None,
         "poly": 3, "kind": "half", "delta": 0.5, "dscale": "edge", "kmax": 5, "merge": 20.0,
@@ -136,12 +136,11 @@ def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None,
             _old=ag.coupled_fits):
     if OPTS["index"] is not None:
         rows = _ridge_rows(smp.vertex)
-        Bu, Bs = smp.Bu.copy(), smp.Bs.copy()
+        Bu = smp.Bu.copy()
         vr = smp.vertex[rows]
         Bu[rows] = OPTS["ridges"].basis(vr, smp.y[rows], h)[0]
-        Bs[rows] = Bu[rows] / h[vr][:, None] ** DEG
         import dataclasses
-        smp = dataclasses.replace(smp, Bu=Bu, Bs=Bs)
+        smp = dataclasses.replace(smp, Bu=Bu)        # smp.Bs = Bu / h_v^|m| follows
     return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints)
 
 
