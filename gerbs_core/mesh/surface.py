@@ -142,7 +142,7 @@ class BlendingSurface:
                                         closed=True)
         self.kernel = kernel
         self._normals = None if normals is None else \
-            unit_normals(normals, len(self.repair.representative))[self.repair.vertex_map]
+            unit_normals(normals, len(self.repair.representative), self.repair.vertex_map)
         cut = crease_input(self.repair, faces, creases, corners)
         if cut is None:
             layouts = face_layouts(topo, rest)

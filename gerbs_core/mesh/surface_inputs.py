@@ -40,12 +40,19 @@ def positive(name, value, integer=False, lo=0.0, closed=False):
     return int(value) if integer else float(value)
 
 
-def unit_normals(normals, V: int) -> np.ndarray:
-    """(V, 3) unit vectors along the finite, non-zero `normals`."""
+def unit_normals(normals, V: int, keep=None) -> np.ndarray:
+    """Unit vectors along `normals` (V, 3) at the vertices ``keep`` (K,) (default all):
+    (K, 3). Only the kept vertices' normals must be finite and non-zero: the repair drops
+    degenerate faces, and a vertex only they used may have a zero normal (Blender gives a
+    collinear triangle's lone vertices one)."""
     nrm = points("normals", normals, V)
+    idx = np.arange(V) if keep is None else np.asarray(keep)
+    nrm = nrm[idx]
     ln = np.linalg.norm(nrm, axis=1)
-    if not np.all(np.isfinite(ln)) or np.any(ln == 0):
-        raise InvalidParameterError("normals", "must be finite and non-zero")
+    bad = ~np.isfinite(ln) | (ln == 0)
+    if bad.any():
+        raise InvalidParameterError("normals", f"must be finite and non-zero (vertex indices "
+                                    f"{idx[bad][:10].tolist()})")
     return nrm / ln[:, None]
 
 

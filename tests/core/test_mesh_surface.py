@@ -186,6 +186,23 @@ def test_vertex_normals_as_hermite_data():
         BlendingSurface(V, F, normals=np.zeros_like(V))
 
 
+def test_normals_are_checked_only_where_the_repair_keeps_vertices():
+    """A vertex the repair leaves out (unused) may carry a zero or NaN normal (Blender gives
+    a vertex of only degenerate faces a zero one): the surface builds, bit for bit as
+    without that vertex; a bad normal at a kept vertex is refused, naming its index."""
+    V, F = P.icosphere(1)
+    n = V / np.linalg.norm(V, axis=1, keepdims=True)
+    Vx = np.vstack([V, [[5.0, 5.0, 5.0]]])              # an unused vertex
+    for bad in ([0.0, 0.0, 0.0], [np.nan, 0.0, 0.0]):
+        s = BlendingSurface(Vx, F, normals=np.vstack([n, [bad]]))
+        ref = BlendingSurface(V, F, normals=n)
+        assert np.array_equal(s.tessellate(2)[0], ref.tessellate(2)[0])
+    worse = n.copy()
+    worse[7] = 0.0
+    with pytest.raises(InvalidParameterError, match=r"normals.*\[7\]"):
+        BlendingSurface(V, F, normals=worse)
+
+
 @pytest.mark.parametrize("name", ["mixed_bent", "delaunay", "tri_grid"])
 def test_straighten_rule(name):
     V, F = MESHES[name]
