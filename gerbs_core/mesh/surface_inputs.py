@@ -40,14 +40,13 @@ def positive(name, value, integer=False, lo=0.0, closed=False):
     return int(value) if integer else float(value)
 
 
-def unit_normals(normals, V: int, keep=None) -> np.ndarray:
-    """Unit vectors along `normals` (V, 3) at the vertices ``keep`` (K,) (default all):
-    (K, 3). Only the kept vertices' normals must be finite and non-zero: the repair drops
-    degenerate faces, and a vertex only they used may have a zero normal (Blender gives a
-    collinear triangle's lone vertices one)."""
-    nrm = points("normals", normals, V)
-    idx = np.arange(V) if keep is None else np.asarray(keep)
-    nrm = nrm[idx]
+def unit_normals(normals, V: int, keep) -> np.ndarray:
+    """Unit vectors along `normals` (V, 3) at the vertices ``keep`` (K,): (K, 3). Only the
+    kept vertices' normals must be finite and non-zero: the repair drops degenerate faces,
+    and a vertex only they used may have a zero normal (Blender gives a collinear
+    triangle's lone vertices one)."""
+    idx = np.asarray(keep)
+    nrm = points("normals", normals, V)[idx]
     ln = np.linalg.norm(nrm, axis=1)
     bad = ~np.isfinite(ln) | (ln == 0)
     if bad.any():
