@@ -90,7 +90,9 @@ class BlendingSurface:
         reproduced exactly) or ``"straighten"`` (the border passes smoothly through
         boundary vertices; mesh corners get rounded).
     normals : optional (V, 3) vertex normals as Hermite data: the tangent plane of l_v
-        is orthogonal to n_v (the surface is then not W @ X: no stencil).
+        is orthogonal to n_v (the surface is then not W @ X: no stencil). Finite at
+        the vertices the repair keeps; a zero row means no normal at that vertex (a
+        ``zero_normal`` warning names it).
     fairness : :class:`~gerbs_core.mesh.agreement.FairnessRule` (the measured default).
     kappa, shrink : envelope parameters of the star cover (:mod:`gerbs_core.gauge.envelope`).
     exact_gauge : the exact (kinked) star radius: a deliberately non-smooth variant,
@@ -141,8 +143,9 @@ class BlendingSurface:
         self.eps0_resolution = positive("eps0_resolution", eps0_resolution, integer=True, lo=1,
                                         closed=True)
         self.kernel = kernel
-        self._normals = None if normals is None else \
+        self._normals, normal_warning = (None, None) if normals is None else \
             unit_normals(normals, len(self.repair.representative), self.repair.vertex_map)
+        self._warnings = self.repair.warnings + ((normal_warning,) if normal_warning else ())
         cut = crease_input(self.repair, faces, creases, corners)
         if cut is None:
             layouts = face_layouts(topo, rest)
@@ -219,8 +222,10 @@ class BlendingSurface:
 
     @property
     def warnings(self) -> tuple:
-        """What the repair changed (:class:`gerbs_core.mesh.repair.MeshWarning`, ordered)."""
-        return self.repair.warnings
+        """What the repair changed (:class:`gerbs_core.mesh.repair.MeshWarning`, ordered),
+        then the kept vertices given a zero normal (tag ``zero_normal``, no Hermite normal
+        there)."""
+        return self._warnings
 
     @property
     def coefficients(self) -> np.ndarray:

@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from ..errors import InvalidParameterError, _short
 from .agreement import FairnessRule
 from .charts import BOUNDARY_RULES
+from .repair import MeshWarning
 
 __all__ = ["points", "positive", "unit_normals", "kernel_setting", "check_settings",
            "face_points"]
@@ -40,19 +41,31 @@ def positive(name, value, integer=False, lo=0.0, closed=False):
     return int(value) if integer else float(value)
 
 
-def unit_normals(normals, V: int, keep) -> np.ndarray:
-    """Unit vectors along `normals` (V, 3) at the vertices ``keep`` (K,): (K, 3). Only the
-    kept vertices' normals must be finite and non-zero: the repair drops degenerate faces,
-    and a vertex only they used may have a zero normal (Blender gives a collinear
-    triangle's lone vertices one)."""
+def unit_normals(normals, V: int, keep):
+    """Unit vectors along `normals` (V, 3) at the vertices ``keep`` (K,): ((K, 3), warning).
+
+    Only the kept vertices' normals must be finite: the repair drops degenerate faces, and
+    a vertex only they used may carry anything. A zero normal at a kept vertex means "no
+    normal there": its row is zero (the Hermite projection then leaves that vertex's
+    tangent plane to the fit) and ``warning`` (a :class:`MeshWarning` naming the input
+    vertices, tag ``zero_normal``) says so, else None. (Blender's own vertex normals are
+    never zero at a vertex the repair keeps: at the lone middle vertex of a collinear
+    triangle it gives a unit one; zero rows come from scripts' data.)"""
     idx = np.asarray(keep)
     nrm = points("normals", normals, V)[idx]
     ln = np.linalg.norm(nrm, axis=1)
-    bad = ~np.isfinite(ln) | (ln == 0)
+    bad = ~np.isfinite(ln)
     if bad.any():
-        raise InvalidParameterError("normals", f"must be finite and non-zero (vertex indices "
+        raise InvalidParameterError("normals", f"must be finite (vertex indices "
                                     f"{idx[bad][:10].tolist()})")
-    return nrm / ln[:, None]
+    zero = ln == 0
+    out = np.divide(nrm, ln[:, None], out=np.zeros_like(nrm), where=~zero[:, None])
+    if not zero.any():
+        return out, None
+    ids = tuple(int(i) for i in idx[zero])
+    return out, MeshWarning("zero_normal", f"zero_normal: no normal given (zero length); the "
+                            f"surface's tangent plane there is fitted; vertex indices"
+                            f"{_short(ids)}", ids, "vertex")
 
 
 def kernel_setting(kernel):

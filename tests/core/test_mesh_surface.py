@@ -183,7 +183,7 @@ def test_vertex_normals_as_hermite_data():
     with pytest.raises(InvalidParameterError, match="normals"):
         s.stencil(2)
     with pytest.raises(InvalidParameterError, match="normals"):
-        BlendingSurface(V, F, normals=np.zeros_like(V))
+        BlendingSurface(V, F, normals=np.full_like(V, np.inf))
 
 
 def test_normals_are_checked_only_where_the_repair_keeps_vertices():
@@ -198,9 +198,34 @@ def test_normals_are_checked_only_where_the_repair_keeps_vertices():
         ref = BlendingSurface(V, F, normals=n)
         assert np.array_equal(s.tessellate(2)[0], ref.tessellate(2)[0])
     worse = n.copy()
-    worse[7] = 0.0
-    with pytest.raises(InvalidParameterError, match=r"normals.*\[7\]"):
+    worse[7] = np.nan
+    with pytest.raises(InvalidParameterError, match=r"normals: must be finite.*\[7\]"):
         BlendingSurface(V, F, normals=worse)
+
+
+def test_a_zero_normal_leaves_that_vertex_free_with_a_warning():
+    """A kept vertex with a zero normal (Blender's at a vertex of only degenerate faces)
+    gets no Hermite normal: its local function is the one without normals, every other
+    vertex's the one with them, and a zero_normal warning names it (input index)."""
+    V, F = P.icosphere(1)
+    n = V / np.linalg.norm(V, axis=1, keepdims=True) + 0.3 * np.roll(V, 1, axis=1)
+    given = n.copy()
+    given[7] = 0.0
+    s = BlendingSurface(V, F, normals=given)
+    free, tied = BlendingSurface(V, F), BlendingSurface(V, F, normals=n)
+    assert np.array_equal(s.coefficients[7], free.coefficients[7])
+    others = np.arange(len(V)) != 7
+    assert np.array_equal(s.coefficients[others], tied.coefficients[others])
+    assert not np.array_equal(s.coefficients[7], tied.coefficients[7])
+    (w,) = [w for w in s.warnings if w.tag == "zero_normal"]
+    assert w.indices == (7,) and w.element == "vertex" and "[7]" in w.message
+    assert s.with_positions(V * 1.1).warnings == s.warnings
+    assert not [w for w in tied.warnings if w.tag == "zero_normal"]
+    # the repair's vertex numbers are the input's: an unused vertex 0 shifts them
+    Vx = np.vstack([[[5.0, 5.0, 5.0]], V])
+    sx = BlendingSurface(Vx, [tuple(int(i) + 1 for i in f) for f in F],
+                         normals=np.vstack([[1.0, 0.0, 0.0], given]))
+    assert [w.indices for w in sx.warnings if w.tag == "zero_normal"] == [(8,)]
 
 
 @pytest.mark.parametrize("name", ["mixed_bent", "delaunay", "tri_grid"])
