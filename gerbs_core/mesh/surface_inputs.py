@@ -48,9 +48,9 @@ def unit_normals(normals, V: int, keep):
     a vertex only they used may carry anything. A zero normal at a kept vertex means "no
     normal there": its row is zero (the Hermite projection then leaves that vertex's
     tangent plane to the fit) and ``warning`` (a :class:`MeshWarning` naming the input
-    vertices, tag ``zero_normal``) says so, else None. (Blender's own vertex normals are
-    never zero at a vertex the repair keeps: at the lone middle vertex of a collinear
-    triangle it gives a unit one; zero rows come from scripts' data.)"""
+    vertices, tag ``zero_normal``) says so, else None. (At the one case measured, the lone
+    middle vertex of a collinear triangle, Blender gives a unit normal: zero rows come
+    from scripts' data.)"""
     idx = np.asarray(keep)
     nrm = points("normals", normals, V)[idx]
     ln = np.linalg.norm(nrm, axis=1)
