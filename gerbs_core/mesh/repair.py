@@ -90,6 +90,8 @@ _TEXT = {
     "open_seam": "boundary vertices at the position of other boundary vertices (an unwelded "
                  "seam, e.g. split UVs or normals of an export): the surface is open there; "
                  "merge_distance welds them",
+    # not a repair: BlendingSurface(normals=) at kept vertices given a zero normal
+    "zero_normal": "no normal given (zero length): the surface's tangent plane there is fitted",
 }
 ORDER = tuple(_TEXT)
 

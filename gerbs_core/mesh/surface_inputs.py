@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InvalidParameterError, _short
+from ..errors import InvalidParameterError
 from .agreement import FairnessRule
 from .charts import BOUNDARY_RULES
-from .repair import MeshWarning
+from .repair import _warning as mesh_warning
 
 __all__ = ["points", "positive", "unit_normals", "kernel_setting", "check_settings",
            "face_points"]
@@ -47,7 +47,7 @@ def unit_normals(normals, V: int, keep):
     Only the kept vertices' normals must be finite: the repair drops degenerate faces, and
     a vertex only they used may carry anything. A zero normal at a kept vertex means "no
     normal there": its row is zero (the Hermite projection then leaves that vertex's
-    tangent plane to the fit) and ``warning`` (a :class:`MeshWarning` naming the input
+    tangent plane to the fit) and ``warning`` (a repair-style MeshWarning naming the input
     vertices, tag ``zero_normal``) says so, else None. (At the one case measured, the lone
     middle vertex of a collinear triangle, Blender gives a unit normal: zero rows come
     from scripts' data.)"""
@@ -62,10 +62,7 @@ def unit_normals(normals, V: int, keep):
     out = np.divide(nrm, ln[:, None], out=np.zeros_like(nrm), where=~zero[:, None])
     if not zero.any():
         return out, None
-    ids = tuple(int(i) for i in idx[zero])
-    return out, MeshWarning("zero_normal", f"zero_normal: no normal given (zero length); the "
-                            f"surface's tangent plane there is fitted; vertex indices"
-                            f"{_short(ids)}", ids, "vertex")
+    return out, mesh_warning("zero_normal", idx[zero], "vertex")
 
 
 def kernel_setting(kernel):

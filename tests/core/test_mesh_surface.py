@@ -204,8 +204,7 @@ def test_normals_are_checked_only_where_the_repair_keeps_vertices():
 
 
 def test_a_zero_normal_leaves_that_vertex_free_with_a_warning():
-    """A kept vertex with a zero normal (Blender's at a vertex of only degenerate faces)
-    gets no Hermite normal: its local function is the one without normals, every other
+    """A kept vertex with a zero normal (from a script's data) gets no Hermite normal: its local function is the one without normals, every other
     vertex's the one with them, and a zero_normal warning names it (input index)."""
     V, F = P.icosphere(1)
     n = V / np.linalg.norm(V, axis=1, keepdims=True) + 0.3 * np.roll(V, 1, axis=1)
