@@ -8,18 +8,40 @@
 #                   3.11 and 3.13), fetched from the package index here, so
 #                   tests/blender/test_extension.py builds the zips offline
 # Used by the README's first command and by .ci/run.
+# Disk: about 4 GB in all (each bpy wheel is ~0.4 GB to download and 1.1-1.5 GB installed).
+# pip keeps no cache copy of the wheels, and identical files inside a venv (bpy 4.2 ships
+# its shared libraries three times under their version aliases) become hard links.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export PIP_NO_CACHE_DIR=1
+# Refuse clearly, before pip fails mid-download, when the disk cannot hold one more bpy.
+need_disk() {  # $1 = MB needed, $2 = what for
+    local avail
+    avail=$(df -Pm . | awk 'NR == 2 {print $4}')
+    if [ "$avail" -lt "$1" ]; then
+        echo "scripts/install.sh: installing $2 needs about $1 MB of free disk here; $avail MB are free" >&2
+        exit 1
+    fi
+}
+compact() {  # $1 = venv folder: identical files become hard links (util-linux hardlink)
+    if command -v hardlink > /dev/null; then
+        hardlink -q "$1" > /dev/null
+    fi
+}
 if [ ! -x .venv/bin/python ]; then
     python3.11 -m venv .venv
 fi
+[ -d .venv/lib/python3.11/site-packages/bpy ] || need_disk 2000 "bpy 5.0.1 in .venv"
 .venv/bin/python -m pip install --quiet --upgrade pip
 .venv/bin/python -m pip install --quiet -e ".[blender,test]"
+compact .venv
 for spec in "bpy42 bpy==4.2.0" "bpy45 bpy==4.5.15"; do
     set -- $spec
     if [ ! -x ".venvs/$1/bin/python" ]; then
         python3.11 -m venv ".venvs/$1"
     fi
+    [ -d ".venvs/$1/lib/python3.11/site-packages/bpy" ] || need_disk 2000 "$2 in .venvs/$1"
     ".venvs/$1/bin/python" -m pip install --quiet "$2" "numpy<2" "scipy==1.17.1"
+    compact ".venvs/$1"
 done
 .venv/bin/python scripts/build_extension.py fetch
