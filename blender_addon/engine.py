@@ -152,14 +152,15 @@ def _counts(mesh) -> tuple:
     return len(mesh.vertices), len(mesh.polygons), len(mesh.loops)
 
 
-def _fresh_input(obj, mod, depsgraph, res, st, render, settings):
+def _fresh_input(obj, mod, depsgraph, res, shown, st, render, settings):
     """The input while the node group shows a result: that result's record (`st`'s input
-    while the record carries the stamp `st` wrote: nothing to read). None when a render
-    shows the viewport surface and may keep it (same resolution)."""
-    shown = res
+    while the record carries the stamp `st` wrote: nothing to read). `shown`: the result
+    the evaluation showed (another modifier's, for a duplicate's first sync; else `res`).
+    None when a render shows the viewport surface and may keep it (same resolution)."""
+    shown = shown or res
     if render:
         final = obj.evaluated_get(depsgraph).data
-        if _counts(final) != _counts(res.evaluated_get(depsgraph).data):  # the viewport one
+        if _counts(final) != _counts(shown.evaluated_get(depsgraph).data):  # shows the viewport's
             if settings["render_resolution"] == settings["resolution"]:
                 return None
             shown = gn.get_result(mod) or res
@@ -191,7 +192,7 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     key = state_key(obj, mod, render)
     st = _states.get(key)
     t0 = time.perf_counter()
-    res, new = results.ensure_result(obj, mod, key, _alive, render)
+    res, shown = results.ensure_result(obj, mod, key, _alive, render)
     blank = SurfaceState(settings=(), input=None, positions=None, result_uid=res.session_uid)
     try:
         settings = gn.read_settings(_evaluated_modifier(obj, mod, depsgraph))
@@ -211,7 +212,7 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
         return _fail(obj, mod, key, blank, problem, progress, render=render)
     retry = False
     if inp is stack.FRESH:
-        inp = _fresh_input(obj, mod, depsgraph, res, st, render, settings)
+        inp = _fresh_input(obj, mod, depsgraph, res, shown, st, render, settings)
         if inp is None and render:
             return SyncResult("unchanged")
         if inp is not None:
