@@ -149,10 +149,13 @@ def remove(obj, mod=None) -> None:
 
 def status(obj, mod=None) -> dict:
     """Counts, timings, the last error and the warning line of a modifier (for panels and
-    scripts); ``warnings``: the repairs of the mesh (gerbs_core MeshWarning records)."""
+    scripts); ``warnings``: the repairs of the mesh (gerbs_core MeshWarning records);
+    ``render_error``: why the last final render's build failed ("" none; its renders show
+    the input meanwhile)."""
     mod = _modifier(obj, mod)
     st = engine.get_state(obj, mod)
-    out = {"error": gn.get_error(mod), "warning": gn.get_warning(mod)}
+    out = {"error": gn.get_error(mod), "warning": gn.get_warning(mod),
+           "render_error": gn.get_render_error(mod)}
     if st is not None and not st.error:
         out.update(points=st.n_points, faces=st.n_faces, triangles=st.n_triangles,
                    warnings=st.warnings,
