@@ -22,8 +22,9 @@ Errors (all ``gerbs_core.errors.GERBSError``):
   :func:`add_surface`, :func:`update` and :func:`apply` when ``raise_errors``
   -- the modifier is kept and shows the message, the base mesh is untouched;
 * an object without the modifier (or not a mesh): :class:`NoModifierError`;
-* Apply refused by Blender (Edit Mode, a mesh used by several objects):
-  :class:`OperationError` (a RuntimeError).
+* Apply refused by Blender (Edit Mode, a mesh used by several objects), or
+  :func:`add_surface` on an object that already has the modifier (one per object):
+  :class:`OperationError` (a RuntimeError); nothing is changed.
 """
 from __future__ import annotations
 
@@ -67,15 +68,22 @@ def get_modifier(obj):
 def add_surface(obj, *, progress=None, raise_errors: bool = True, **settings):
     """Add a GERBS Blending Surface modifier to `obj` (a mesh object) and build it.
 
-    Returns the modifier. Raises InvalidParameterError (nothing added) for a bad
-    setting, ``GERBSSyncError`` naming the problem if the mesh is invalid (the
-    modifier stays, showing the error). Without ``render_resolution`` renders use
-    ``resolution``.
+    Returns the modifier. Raises, adding nothing: InvalidParameterError for a bad
+    setting (checked first), :class:`OperationError` if `obj` already has a GERBS
+    modifier (one per object: change its settings with :func:`set_settings`, or
+    :func:`remove` it first). Raises ``GERBSSyncError`` naming the problem if the
+    mesh is invalid (the modifier stays, showing the error). Without
+    ``render_resolution`` renders use ``resolution``.
     """
     _mesh_object(obj)
     if "resolution" in settings and "render_resolution" not in settings:
         settings = {**settings, "render_resolution": settings["resolution"]}
     values = settings_mod.validate({**ids.DEFAULTS, **settings})
+    existing = get_modifier(obj)
+    if existing is not None:  # a second one would be ignored (engine.sync_object)
+        raise OperationError(f"{obj.name!r} already has a {ids.MODIFIER_NAME} modifier "
+                             f"({existing.name!r}); one per object: change its settings "
+                             f"or remove it first")
     mod = obj.modifiers.new(ids.MODIFIER_NAME, "NODES")
     mod.node_group = gn.ensure_group()
     gn.write_settings(mod, **values)
@@ -114,7 +122,10 @@ def apply(obj, mod=None) -> None:
     if obj.data.users > 1:
         raise OperationError(f"{obj.name!r}: its mesh {obj.data.name!r} is used by "
                              f"{obj.data.users} objects; make it single-user first")
-    _raise_if_error(handlers.sync_now(obj), True)
+    # only the applied modifier's errors matter: a further GERBS modifier (copied in
+    # the modifier panel) is ignored by the sync and must not block this one
+    outcome = handlers.sync_now(obj)
+    _raise_if_error(outcome[gn.gerbs_modifiers(obj).index(mod):][:1], True)
     bpy.context.view_layer.update()  # the result written by the sync is what gets applied
     try:
         with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj]):
@@ -138,10 +149,13 @@ def remove(obj, mod=None) -> None:
 
 def status(obj, mod=None) -> dict:
     """Counts, timings, the last error and the warning line of a modifier (for panels and
-    scripts); ``warnings``: the repairs of the mesh (gerbs_core MeshWarning records)."""
+    scripts); ``warnings``: the repairs of the mesh (gerbs_core MeshWarning records);
+    ``render_error``: why the last final render's build failed ("" none; its renders show
+    the input meanwhile)."""
     mod = _modifier(obj, mod)
     st = engine.get_state(obj, mod)
-    out = {"error": gn.get_error(mod), "warning": gn.get_warning(mod)}
+    out = {"error": gn.get_error(mod), "warning": gn.get_warning(mod),
+           "render_error": gn.get_render_error(mod)}
     if st is not None and not st.error:
         out.update(points=st.n_points, faces=st.n_faces, triangles=st.n_triangles,
                    warnings=st.warnings,

@@ -28,8 +28,12 @@ syncs the render result at the Render Resolution, from what the modifier receive
 in the render. It writes Blender data only where that is safe (background, or
 Render > Lock Interface on: a render's handlers run beside the interface);
 otherwise, and while its own result is not fresh, a render shows the viewport
-surface (node_tree.py). Errors of a render build are kept for the panel and do
-not touch the viewport.
+surface (node_tree.py). A render build that fails puts its message into the
+modifier's Render Error (not its Error: the viewport keeps its surface): final renders
+then show the modifier's input, as a failed build does in the viewport, never the
+viewport surface in its place; the render handler logs it and the panel and
+``api.status`` show it. A render that builds clears it, and so does a viewport sync
+once the settings differ from those the render failed with.
 
 Invalid input never touches the base mesh: the core raises a
 ``GERBSValueError`` naming the problem and the indices (a NaN or infinite carried
@@ -83,13 +87,33 @@ def set_error(obj, mod, message: str, warning: str = "") -> None:
         obj.update_tag()  # re-evaluate: the Switch node shows the base mesh or the surface
 
 
+def set_render_error(obj, mod, message: str) -> None:
+    """The modifier's Render Error: while set, final renders show its input."""
+    if gn.set_render_error(mod, message):
+        obj.update_tag()  # re-evaluate: the render's Switch shows the input or the surface
+
+
 def _fail(obj, mod, key, st, message, progress, problem=None, render=False) -> SyncResult:
     st.error, st.stencil, st.problem, st.stamp = message, None, problem, ""
     _states[key] = st
-    if not render:  # the Error input is shared: a render's failure must not hide the viewport
+    if render:  # a render's own line: the Error input would hide the viewport surface too
+        set_render_error(obj, mod, message)
+    else:
         set_error(obj, mod, message)
     progress(1.0, "error")
     return SyncResult("error", message)
+
+
+def _clear_stale_render_error(obj, mod, settings, crz) -> None:
+    """A viewport sync: drop the Render Error of a final render built with other settings
+    than the current ones (or in an earlier session): the next render decides anew (it
+    shows the input until then only if it cannot build: no Lock Interface)."""
+    if not gn.get_render_error(mod):
+        return
+    failed = _states.get(state_key(obj, mod, True))
+    want = _build_key(settings, settings["render_resolution"]) + (("creases", crz.key),)
+    if failed is None or (failed.settings and failed.settings != want):
+        set_render_error(obj, mod, "")
 
 
 def is_active(obj, mod) -> bool:
@@ -152,14 +176,15 @@ def _counts(mesh) -> tuple:
     return len(mesh.vertices), len(mesh.polygons), len(mesh.loops)
 
 
-def _fresh_input(obj, mod, depsgraph, res, st, render, settings):
+def _fresh_input(obj, mod, depsgraph, res, shown, st, render, settings):
     """The input while the node group shows a result: that result's record (`st`'s input
-    while the record carries the stamp `st` wrote: nothing to read). None when a render
-    shows the viewport surface and may keep it (same resolution)."""
-    shown = res
+    while the record carries the stamp `st` wrote: nothing to read). `shown`: the result
+    the evaluation showed (another modifier's, for a duplicate's first sync; else `res`).
+    None when a render shows the viewport surface and may keep it (same resolution)."""
+    shown = shown or res
     if render:
         final = obj.evaluated_get(depsgraph).data
-        if _counts(final) != _counts(res.evaluated_get(depsgraph).data):  # the viewport one
+        if _counts(final) != _counts(shown.evaluated_get(depsgraph).data):  # shows the viewport's
             if settings["render_resolution"] == settings["resolution"]:
                 return None
             shown = gn.get_result(mod) or res
@@ -191,7 +216,7 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     key = state_key(obj, mod, render)
     st = _states.get(key)
     t0 = time.perf_counter()
-    res, new = results.ensure_result(obj, mod, key, _alive, render)
+    res, shown = results.ensure_result(obj, mod, key, _alive, render)
     blank = SurfaceState(settings=(), input=None, positions=None, result_uid=res.session_uid)
     try:
         settings = gn.read_settings(_evaluated_modifier(obj, mod, depsgraph))
@@ -211,7 +236,7 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
         return _fail(obj, mod, key, blank, problem, progress, render=render)
     retry = False
     if inp is stack.FRESH:
-        inp = _fresh_input(obj, mod, depsgraph, res, st, render, settings)
+        inp = _fresh_input(obj, mod, depsgraph, res, shown, st, render, settings)
         if inp is None and render:
             return SyncResult("unchanged")
         if inp is not None:
@@ -234,6 +259,8 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     # key, so a crease change rebuilds
     crz = creases_mod.from_carried(inp.carried)
     skey = skey + (("creases", crz.key),)
+    if not render:
+        _clear_stale_render_error(obj, mod, settings, crz)
     _copy_materials(obj.data, res.data)
     outcome = _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0)
     if outcome is None:
@@ -321,7 +348,9 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
     st.n_triangles = built.lattice.n_triangles
     st.build_seconds = time.perf_counter() - t0
     _states[key] = st
-    if not render:
+    if render:
+        set_render_error(obj, mod, "")
+    else:
         set_error(obj, mod, "", format_warnings(st.warnings))
     obj.update_tag()
     progress(1.0, "done")

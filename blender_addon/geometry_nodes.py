@@ -20,7 +20,8 @@ group (built by :mod:`node_tree`) serves every object:
   result;
 * on an invalid mesh the add-on writes the message into the hidden "Error"
   input: a Warning node shows it in the modifier panel and the base mesh passes
-  through unchanged.
+  through unchanged; a build that fails only in a final render goes into "Render
+  Error": final renders then show the base mesh (the viewport is not affected).
 
 Alternatives rejected: a Python-only "fake modifier" (an operator rewriting
 ``obj.data``) destroys the base mesh and breaks Apply/visibility/undo; a
@@ -170,6 +171,19 @@ def get_error(mod) -> str:
 
 def get_warning(mod) -> str:
     return str(mod.get(_internal(mod, "warning"), ""))
+
+
+def get_render_error(mod) -> str:
+    """The last final render's build error ("" none; also for a group older than v9)."""
+    try:
+        return str(mod.get(_internal(mod, "render_error"), ""))
+    except KeyError:  # an older group, not yet moved to the current one
+        return ""
+
+
+def set_render_error(mod, message: str) -> bool:
+    """Make final renders show the input with `message` ("" clears). True if it changed."""
+    return set_error(mod, message, "render_error")
 
 
 def set_warning(mod, message: str) -> bool:

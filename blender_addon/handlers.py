@@ -118,6 +118,8 @@ def _sync_one(obj, depsgraph, force: bool) -> None:
         with Progress(callback=_progress_callback, window_manager=_window_manager()) as progress:
             outcome = engine.sync_object(obj, depsgraph, force=force, progress=progress)
         _record(key, obj.name, [r.message for r in outcome if r.status == "error"])
+        if not gn.get_render_error(mods[0]):  # cleared by this sync (settings changed)
+            _errors.pop(engine.state_key(obj, mods[0], True), None)
         if _outcomes is not None:
             _outcomes[key] = outcome
         if any(r.rebind for r in outcome):
@@ -167,7 +169,7 @@ def _collect() -> None:
     results.collect_garbage()
     alive = {engine.state_key(o, m) for o in engine.gerbs_objects() for m in gn.gerbs_modifiers(o)}
     engine.prune(alive)
-    for key in [k for k in _errors if k not in alive]:
+    for key in [k for k in _errors if k[:2] not in alive]:  # (render keys with theirs)
         del _errors[key]
 
 
@@ -279,9 +281,14 @@ def _render_sync(objects, depsgraph) -> None:
             if not mods:
                 continue
             try:
-                engine.sync_object(obj, depsgraph)
+                outcome = engine.sync_object(obj, depsgraph)
             except Exception:  # a handler must never raise into Blender
                 log.exception("GERBS: render sync of %s failed", obj.name)
+                continue
+            # the render's own entry (logged once; shown in the status bar by the next
+            # viewport update: the render may run beside the interface)
+            _record(engine.state_key(obj, mods[0], True), f"{obj.name} (final render)",
+                    [r.message for r in outcome if r.status == "error"])
     finally:
         _busy = False
 

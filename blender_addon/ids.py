@@ -31,14 +31,15 @@ SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
 NODE_GROUP_NAME = "GERBS Blending Surface"
 MODIFIER_NAME = "GERBS Blending Surface"
 GROUP_TAG = "gerbs_group_version"  # custom property on the node group
-GROUP_VERSION = 8  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
+GROUP_VERSION = 9  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
 # Shape; 4: Merge by Distance, Merge Distance and the Warning line; 5: Render Resolution
 # and a render result, the built settings and carried attributes recorded on each result
 # (no "Built ..." inputs), the input passed on while stale; 6: the channel says which
 # record the input's topology and carried layers equal (CHANNEL_RECORD); 7: the checks
 # reduce over a selection (node_helpers.Tree.none_differ), one pass over the faces, one
 # comparison per value (node_fresh._differs); 8: with Use Custom Normals the input's vertex
-# normals are checked against the record and passed on in the channel (CHANNEL_NORMAL)
+# normals are checked against the record and passed on in the channel (CHANNEL_NORMAL); 9:
+# a Render Error: a final render whose build failed shows the input, not the viewport surface
 PART_TAG = "gerbs_part"  # custom property on each nested node group (node_parts.py): its key
 PART_VERSION = "gerbs_part_version"  # ... and the GROUP_VERSION it was built for
 PART_PREFIX = ".GERBS "  # name prefix of the nested node groups
@@ -204,6 +205,9 @@ INTERNAL = (
                description="Hidden object holding the surface at the render resolution"),
     SocketSpec("error", "Error", "NodeSocketString", "", hidden=True,
                description="Last error of the add-on; shown as a node warning"),
+    SocketSpec("render_error", "Render Error", "NodeSocketString", "", hidden=True,
+               description="Error of the last final render's build; while set, final "
+                           "renders show the input (the viewport is not affected)"),
     SocketSpec("warning", "Warning", "NodeSocketString", "", hidden=True,
                description="What the last build repaired in the mesh; shown as a node warning"),
     SocketSpec("names", "Attribute Names", "NodeSocketString", "", hidden=True,

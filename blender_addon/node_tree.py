@@ -8,7 +8,10 @@ render resolution (final renders)::
 
     view   = Result if no Error and Result is fresh for Resolution
              else the input, passed on with the channel (node_fresh.channel)
-    render = Render Result if no Error and it is fresh for Render Resolution
+    render = the input, passed on with the channel, if Render Error (the last final
+             render's build failed: it shows the modifier's input, as a failed build
+             does in the viewport, never a surface of another resolution)
+             else Render Result if no Error and it is fresh for Render Resolution
              else view (a render without its own result shows the viewport surface)
     output = view in the viewport (Is Viewport), render in final renders,
              results with their vertex groups written and without their record
@@ -118,6 +121,8 @@ def build(group) -> None:
                           current["render_resolution"])[0]
     render = t.switch("GEOMETRY", t.boolean("AND", no_error, render_fresh), view,
                       _shown(t, gin, results["render_result"]))
+    render = t.switch("GEOMETRY", t.compare("STRING", "NOT_EQUAL", gin.outputs["Render Error"],
+                                            ""), render, passed)
     is_viewport = t.node("GeometryNodeIsViewport").outputs[0]
     t.link(t.switch("GEOMETRY", is_viewport, render, view), gout.inputs[0])
     gin.location, gout.location = (-900, 0), (1400, 0)

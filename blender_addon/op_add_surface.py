@@ -27,9 +27,10 @@ class OBJECT_OT_gerbs_add_surface(bpy.types.Operator):
             settings = settings_from(self)
             if not self.properties.is_property_set("render_resolution"):
                 del settings["render_resolution"]  # renders follow the resolution given
-            try:  # settings are validated by api.add_surface before anything is added
+            try:  # settings, and that obj has no GERBS modifier yet, are checked by
+                # api.add_surface before anything is added
                 mod = api.add_surface(obj, progress=progress, raise_errors=False, **settings)
-            except ValueError as exc:
+            except (ValueError, api.OperationError) as exc:
                 self.report({"ERROR"}, str(exc))
                 return {"CANCELLED"}
         status = api.status(obj, mod)

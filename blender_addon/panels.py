@@ -59,6 +59,10 @@ def panel_rows(obj, mod, width_px: float = 300.0, scale: float = 1.0) -> dict:
             text += " It is in the mesh the modifiers above GERBS make; fix it there."
         out["error"] = problems.wrap(text, width_px, scale)
         out["select"] = problem is not None and problems.on_base_mesh(obj, mod)
+    elif info["render_error"]:  # the viewport is fine; final renders show the input
+        out["error"] = problems.wrap(f"Final render: {problems.headline(info['render_error'])} "
+                                     f"Renders show the mesh without the surface until it "
+                                     f"builds.", width_px, scale)
     elif info["warning"]:  # what the mesh repair changed
         out["warning"] = problems.wrap(problems.headline(info["warning"]), width_px, scale)
         out["select"] = bool(st is not None and st.warnings) and problems.on_base_mesh(obj, mod)

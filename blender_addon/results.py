@@ -39,28 +39,31 @@ def new_result_object(obj, render: bool = False):
     return res
 
 
-def ensure_result(obj, mod, key: tuple, alive, render: bool = False) -> tuple[object, bool]:
-    """The modifier's hidden result object (`render`: its render result) and whether it
-    is new.
+def ensure_result(obj, mod, key: tuple, alive, render: bool = False) -> tuple[object, object]:
+    """``(result, shown)``: the modifier's hidden result object (`render`: its render
+    result), and the result object it pointed at until now -- what the evaluation that
+    led to this sync showed (`result` itself, unless it was replaced; None if none).
 
-    A new one is made if there is none, or if the result belongs to another
-    live modifier (``alive(owner_key)``; e.g. the object was duplicated with its
-    modifier, and both now point at one result).
+    A new result is made if there is none, or if the result belongs to another
+    live modifier (``alive(owner_key)``): the object was duplicated with its
+    modifier (Shift+D, Alt+D, ``obj.copy()``), and both now point at one result.
+    The copy then builds its own; until its first build it shows the original's
+    result, whose record is what the copy receives (the node group checked it), so
+    `shown` is where the sync reads its input.
     """
-    res = gn.get_result(mod, render)
+    shown = res = gn.get_result(mod, render)
     if res is not None:
         owner = _owners.get(res.session_uid)
         if res.type != "MESH" or (owner is not None and owner != key and alive(owner)):
             res = None
-    new = res is None
-    if new:
+    if res is None:
         res = new_result_object(obj, render)
         gn.set_result(mod, res, render)
         # an ID property write does not tag depsgraph relations; re-assigning the
         # group through RNA does, so the new object is evaluated in this update
         mod.node_group = mod.node_group
     _owners[res.session_uid] = key
-    return res, new
+    return res, (shown if shown is not None and shown.type == "MESH" else None)
 
 
 def collect_garbage() -> int:

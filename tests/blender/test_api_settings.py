@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from .helpers import make_object
+from .helpers import make_object, positions
 
 pytestmark = pytest.mark.blender
 
@@ -147,3 +147,56 @@ def test_apply_on_a_multi_user_mesh_says_why_once(blender):
         bpy.ops.object.gerbs_apply()
     assert str(info.value).count("Error") == 1 and "used by 2 objects" in str(info.value)
     assert len(obj.modifiers) == 1
+
+
+@pytest.mark.parametrize("route", ["api", "operator"])
+def test_a_second_surface_on_one_object_is_refused_and_apply_still_works(blender, route):
+    """One GERBS modifier per object: a second add (api or menu operator) is refused up
+    front, naming the modifier already there, and adds nothing; the first one applies."""
+    import bpy
+
+    from blender_addon import api
+    from blender_addon.errors import OperationError
+
+    from .helpers import evaluated
+
+    obj = make_object("icosphere")
+    mod = api.add_surface(obj, resolution=2)
+    P = evaluated(obj)
+    match = "already has a GERBS Blending Surface modifier .'GERBS Blending Surface'.; one per"
+    if route == "api":
+        with pytest.raises(OperationError, match=match):
+            api.add_surface(obj, resolution=3)
+    else:
+        with pytest.raises(RuntimeError, match=match) as info:
+            bpy.ops.object.gerbs_add_surface(resolution=3)
+        assert str(info.value).count("Error") == 1
+    assert list(obj.modifiers) == [mod] and api.get_settings(obj)["resolution"] == 2
+    assert api.status(obj)["error"] == ""
+    assert np.array_equal(evaluated(obj), P)
+    api.apply(obj)
+    assert len(obj.modifiers) == 0 and np.array_equal(positions(obj.data), P)
+
+
+def test_a_gerbs_modifier_copied_in_the_stack_does_not_block_applying_the_first(blender):
+    """A further GERBS modifier made another way (the modifier panel's Duplicate) is
+    ignored with an error; applying the first one still works, applying it is refused."""
+    import bpy
+
+    from blender_addon import api
+    from blender_addon.errors import GERBSSyncError
+
+    from .helpers import evaluated
+
+    obj = make_object("icosphere")
+    mod = api.add_surface(obj, resolution=2)
+    P = evaluated(obj)
+    with bpy.context.temp_override(object=obj, active_object=obj):
+        bpy.ops.object.modifier_copy(modifier=mod.name)
+    extra = obj.modifiers[1]
+    assert "one GERBS Blending Surface modifier per object" in api.status(obj, extra)["error"]
+    with pytest.raises(GERBSSyncError, match="this one is ignored"):
+        api.apply(obj, extra)
+    assert len(obj.modifiers) == 2
+    api.apply(obj)
+    assert list(obj.modifiers) == [extra] and np.array_equal(positions(obj.data), P)

@@ -4,7 +4,7 @@ import bpy
 import numpy as np
 import pytest
 
-from .helpers import evaluated, fresh_surface, modifier_input, positions, topology
+from .helpers import evaluated, fresh_surface, make_object, modifier_input, positions, topology
 
 pytestmark = pytest.mark.blender
 
@@ -270,3 +270,36 @@ def test_viewport_and_render_resolution_like_subdivision_levels(blender):
     assert len(evaluated(cube)) == 26
     api.set_settings(cube, render_resolution=3)
     assert _render_counts()[cube.name] == 8 + 12 * 2 + 6 * 4
+
+
+def test_a_final_render_whose_build_fails_shows_the_input_and_says_why(blender, caplog):
+    """Render Resolution 64 beyond the memory budget: the final render shows what the
+    modifier receives (the 42-vertex cage), not the viewport surface in its place; the
+    error is logged for the render and shown by the panel and api.status; the viewport
+    keeps its surface, the mesh is untouched; a Render Resolution that fits renders."""
+    import logging
+
+    from blender_addon import api, panels
+
+    from .helpers import base_positions
+
+    obj = make_object("icosphere")
+    mod = api.add_surface(obj, resolution=2, render_resolution=64, memory_budget=1e8)
+    X, P = base_positions(obj), evaluated(obj)
+    assert len(P) == 162
+    with caplog.at_level(logging.ERROR, logger="blender_addon"):
+        counts = _render_counts()
+    assert counts[obj.name] == 42  # the input, neither 162 (viewport) nor 163842
+    info = api.status(obj)
+    assert info["error"] == "" and "too large: resolution 64" in info["render_error"]
+    assert any("final render" in r.getMessage() and "resolution 64" in r.getMessage()
+               for r in caplog.records if r.levelno == logging.ERROR)
+    assert "Final render: Too large: resolution 64" in " ".join(
+        panels.panel_rows(obj, mod, width_px=2000)["error"])
+    assert np.array_equal(evaluated(obj), P) and np.array_equal(base_positions(obj), X)
+    assert _render_counts()[obj.name] == 42  # the next render decides again: still too large
+    api.set_settings(obj, render_resolution=4)
+    evaluated(obj)  # the viewport sync drops the error of the render's old settings
+    assert api.status(obj)["render_error"] == ""
+    assert _render_counts()[obj.name] == 42 + 120 * 3 + 80 * 3  # r = 4
+    assert api.status(obj)["render_error"] == "" and np.array_equal(evaluated(obj), P)
