@@ -32,7 +32,7 @@ from .evaluate import evaluate, partition_at
 from .lattice import Lattice, output_counts
 from .lattice_templates import obtuse_flips
 from .layout import face_layouts
-from .memory import memory_estimate
+from .memory import assembly_chunk, evaluation_chunk, memory_estimate
 from .monomials import monomials
 from .repair import repair_mesh
 from .rings import data_rings
@@ -256,7 +256,8 @@ class BlendingSurface:
         require_cover(eps, self.kernel)
 
     def _evaluate(self, f, x, nu):
-        return evaluate(self.model, self._Xm, self._coef, f, x, nu)
+        return evaluate(self.model, self._Xm, self._coef, f, x, nu,
+                        evaluation_chunk(self.memory_budget, nu))
 
     # ---------------------------------------------------------------- public
     def evaluate_all(self, face_index, local_coords, nu: int = 0):
@@ -304,8 +305,9 @@ class BlendingSurface:
 
     # ---------------------------------------------------------- tessellation
     def memory_estimate(self, resolution: int) -> int:
-        """Bytes a tessellation or stencil at `resolution` is expected to need at peak."""
-        return memory_estimate(self.model, resolution)
+        """Bytes a tessellation or stencil at `resolution` is expected to need at peak (its
+        steps sized for :attr:`memory_budget`, :mod:`gerbs_core.mesh.memory`)."""
+        return memory_estimate(self.model, resolution, self.memory_budget)
 
     def lattice(self, resolution: int):
         """The sample lattice at `resolution` (checked against the memory budget); triangles
@@ -357,12 +359,13 @@ class BlendingSurface:
         from .assembly import assemble
         lat = self.lattice(resolution)
         cut = self.model.crease
+        chunk = assembly_chunk(self.memory_budget, int(self.model.topology.face_sizes.max()))
         if cut is None:
-            base, mono, eps = assemble(self.model, lat)
+            base, mono, eps = assemble(self.model, lat, chunk)
             fits = self.model.fits
         else:
             mlat = Lattice(self.model.topology, resolution)
-            base, mono, eps = assemble(self.model, mlat)
+            base, mono, eps = assemble(self.model, mlat, chunk)
             rows = first_occurrence(cut.sample_map(mlat), lat.n_points)
             # merged crease samples: one row each; the columns of a vertex's copies summed
             base, mono = base[rows] @ cut.copy_matrix, mono[rows]
