@@ -40,6 +40,7 @@ from .stencil import Stencil
 from .surface_inputs import (check_settings, face_points, kernel_setting, points, positive,
                              unit_normals)
 from .topology import MeshTopology
+from .validation import check_finite
 
 __all__ = ["BlendingSurface", "SurfaceModel"]
 
@@ -233,11 +234,14 @@ class BlendingSurface:
         return self._coef
 
     def with_positions(self, vertices) -> "BlendingSurface":
-        """The surface of new input positions (V, 3) with the same binding (model shared)."""
+        """The surface of new input positions (V, 3) with the same binding (model shared).
+        Refused as the constructor refuses them: InvalidParameterError (shape),
+        InvalidMeshError ``non_finite`` naming the rows with NaN or infinite coordinates."""
         new = object.__new__(BlendingSurface)
         new.__dict__.update({k: v for k, v in self.__dict__.items() if k != "eps0"})
-        new._X = self.repair.positions(points("vertices", vertices,
-                                               len(self.repair.representative)))
+        X = points("vertices", vertices, len(self.repair.representative))
+        check_finite(X, "vertices")
+        new._X = self.repair.positions(X)
         new._X.flags.writeable = False
         new._coef = new._coefficients(new._X)
         return new
