@@ -23,6 +23,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
+from ..kernels.names import as_kernel
 from .agreement import MMAX, FairnessRule, fair_fits
 from .charts import vertex_charts
 from .coupling import SelectedFits
@@ -37,8 +38,7 @@ from .monomials import monomials
 from .repair import repair_mesh
 from .rings import data_rings
 from .stencil import Stencil
-from .surface_inputs import (check_settings, face_points, kernel_setting, points, positive,
-                             unit_normals)
+from .surface_inputs import check_settings, face_points, points, positive, unit_normals
 from .topology import MeshTopology
 from .validation import check_finite
 
@@ -83,7 +83,9 @@ class BlendingSurface:
     ----------
     vertices : (V, 3) positions. faces : list of int sequences, (F, k) array or a
         :class:`~gerbs_core.mesh.topology.MeshTopology`.
-    kernel : the GERBS kernel of the size functions (default ``ERBS()``).
+    kernel : the GERBS kernel of the size functions (default ``ERBS()``), or its name
+        (``"erbs"``, ``"bfbs"``, ``"logistic"``, ``"affine"``: default parameters;
+        :func:`gerbs_core.kernels.as_kernel`).
     rest_positions : (V, 3) the rest shape the layouts and fits are bound to
         (default: ``vertices``); the output is a fixed sparse linear function of the
         positions for a fixed topology and rest shape (:meth:`stencil`).
@@ -138,7 +140,7 @@ class BlendingSurface:
         self.repair = repair_mesh(X, faces, merge_distance=merge_distance, rest_positions=rest)
         X, topo = np.array(self.repair.vertices), self.repair.topology
         rest = X if rest is None else np.array(self.repair.rest)
-        kernel = kernel_setting(kernel)
+        kernel = as_kernel(kernel)
         fairness = check_settings(boundary, kappa, shrink, fairness)
         self.memory_budget = positive("memory_budget", memory_budget)
         self.eps0_resolution = positive("eps0_resolution", eps0_resolution, integer=True, lo=1,
