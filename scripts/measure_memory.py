@@ -7,7 +7,7 @@ For the chosen mesh (Suzanne by default) the smallest resolution giving at least
 process (so peaks do not mix) and reports:
 
 * ``estimate``: what BlendingSurface.lattice() compares with ``memory_budget``
-  (the guard; ResourceLimitError beyond);
+  (the guard; ResourceLimitError beyond; ``--budget`` also sizes the evaluation steps);
 * ``tracemalloc peak``: the largest traced allocation total (numpy buffers are
   traced) during the call, above what was allocated before it;
 * ``RSS peak``: resource.getrusage ru_maxrss of the child, minus its RSS right
@@ -57,19 +57,12 @@ def _resolution_for(topology, points: int) -> int:
     return r
 
 
-def guard_estimate(X, faces, resolution: int, **kw) -> float:
-    """The guard's estimate in bytes, read from the ResourceLimitError it raises
-    for a 1-byte budget (the message states it in MB)."""
-    import re
-
+def guard_estimate(X, faces, resolution: int, budget: float, **kw) -> float:
+    """The guard's estimate in bytes for a surface with ``memory_budget=budget`` (the
+    evaluation steps, hence the estimate, are sized for the budget)."""
     from gerbs_core import BlendingSurface
-    from gerbs_core.errors import ResourceLimitError
 
-    try:
-        BlendingSurface(X, faces, memory_budget=1, **kw).lattice(resolution)
-    except ResourceLimitError as exc:
-        return float(re.search(r"estimated memory (\d+) MB", str(exc)).group(1)) * 1e6
-    raise AssertionError("a 1-byte budget was not refused")
+    return float(BlendingSurface(X, faces, memory_budget=budget, **kw).memory_estimate(resolution))
 
 
 def child(mesh: str, points: int, stage: str, trace: bool, budget: float) -> dict:
@@ -115,7 +108,7 @@ def child(mesh: str, points: int, stage: str, trace: bool, budget: float) -> dic
         res["rss_peak_total"] = rss1
         res["rss_peak_above_start"] = rss1 - max(rss0, cur0) if rss1 > rss0 else 0
         res["rss_start"] = cur0
-    res["estimate"] = guard_estimate(X, faces, r)
+    res["estimate"] = guard_estimate(X, faces, r, budget)
     return res
 
 

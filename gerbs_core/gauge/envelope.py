@@ -98,7 +98,7 @@ class RadialEnvelope:
         Guaranteed lower bound rho~ >= kappa * shrink * rho.
     shrink : float in (0, 1]
         rho~ <= shrink * rho (supports compactly inside the open star).
-    kernel : Kernel or None (-> ERBS())
+    kernel : Kernel, its name (:func:`~gerbs_core.kernels.as_kernel`) or None (-> ERBS())
         Blending kernel F of the GERBS spline (*).
     exact : bool
         If True, rho~ = shrink * rho exactly (kinked: for tests that must
@@ -153,10 +153,8 @@ class RadialEnvelope:
         self.kappa = _check_unit_interval("kappa", kappa, closed_right=False)
         self.shrink = _check_unit_interval("shrink", shrink, closed_right=True)
         self.exact = bool(exact)
-        if kernel is None:
-            from ..kernels import ERBS
-            kernel = ERBS()
-        self.kernel = kernel
+        from ..kernels.names import as_kernel
+        self.kernel = as_kernel(kernel)
         from .envelope_table import polar_pieces, validate_stars
         one = np.array([0, len(theta)])
         validate_stars(theta, radius, one, np.array([self.closed]))

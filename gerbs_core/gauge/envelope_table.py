@@ -216,9 +216,8 @@ def envelope_table(theta, radius, ptr, closed, kappa=0.8, shrink=0.95, kernel=No
     closed = np.broadcast_to(np.asarray(closed, dtype=bool), (len(ptr) - 1,))
     kappa = _check_unit_interval("kappa", kappa, closed_right=False)
     shrink = _check_unit_interval("shrink", shrink, closed_right=True)
-    if kernel is None:
-        from ..kernels import ERBS
-        kernel = ERBS()
+    from ..kernels.names import as_kernel
+    kernel = as_kernel(kernel)
     validate_stars(theta, radius, ptr, closed)
     normal, dist = polar_pieces(theta, radius, ptr)
     S = len(ptr) - 1

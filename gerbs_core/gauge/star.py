@@ -52,7 +52,7 @@ class StarGauge:
         Chart angle scale s (phi = s * theta). None -> 2*pi/span for a closed
         envelope (1 in the plane), 1 for an open one. A closed envelope needs
         s * span = 2*pi; an open one s * span < 2*pi.
-    kernel : Kernel or None (-> ERBS())
+    kernel : Kernel, its name (:func:`~gerbs_core.kernels.as_kernel`) or None (-> ERBS())
         Kernel of b (the envelope has its own blending kernel).
     center : (2,) array or None
         The centre in the caller's coordinates; evaluation points y are
@@ -85,10 +85,8 @@ class StarGauge:
                 "scale", f"an open sector must span < 2*pi in the chart; scale * span = "
                 f"{scale * span!r}")
         self.scale = scale
-        if kernel is None:
-            from ..kernels import ERBS
-            kernel = ERBS()
-        self.kernel = kernel
+        from ..kernels.names import as_kernel
+        self.kernel = as_kernel(kernel)
         c = np.zeros(2) if center is None else np.array(center, dtype=np.float64).reshape(-1)
         if c.shape != (2,) or not np.isfinite(c).all():
             raise InvalidParameterError("center", f"expected 2 finite numbers, got {center!r}")

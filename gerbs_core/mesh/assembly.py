@@ -33,7 +33,7 @@ from .polygon_map import map_points
 
 __all__ = ["assemble", "CHUNK_SAMPLES", "SHARED_FRACTION"]
 
-CHUNK_SAMPLES = 16_384   # samples per chunk (~65k terms on quads: the working set in cache)
+CHUNK_SAMPLES = 16_384   # samples per chunk at most (~65k terms on quads: the working set in cache)
 # evaluate face classes once when their template points are at most this share of the
 # samples (every template point of a representative is evaluated, shared ones included)
 SHARED_FRACTION = 0.5
@@ -127,18 +127,18 @@ def _degree_of(M):
     return {n_monomials(d): d for d in range(1, 8)}[M]
 
 
-def _evaluate_rows(model, face, x_of, ptr_b, ptr_e, by_vertex, out_b, out_e):
+def _evaluate_rows(model, face, x_of, ptr_b, ptr_e, by_vertex, out_b, out_e, chunk):
     """Write the rows of the samples (face (N,), x_of(p0, p1) -> (p1 - p0, 2) the points of
     samples p0..p1 in their faces: made chunk by chunk) into
     ``out_b`` = (data, cols or None) and ``out_e`` likewise at the row pointers ptr_b,
-    ptr_e (N + 1,); returns max_k psi_k per sample (N,)."""
+    ptr_e (N + 1,), ``chunk`` samples at a time; returns max_k psi_k per sample (N,)."""
     topo, ch, cover = model.topology, model.charts, model.cover
     Mv = n_monomials(np.asarray(model.degrees))
     n_max = int(topo.face_sizes.max())
     N = len(face)
     mx = np.empty(N)
-    for p0 in range(0, N, CHUNK_SAMPLES):
-        p1 = min(N, p0 + CHUNK_SAMPLES)
+    for p0 in range(0, N, chunk):
+        p1 = min(N, p0 + chunk)
         terms = _Terms(topo, by_vertex, face, ptr_b, p0, p1)
         xt = x_of(p0, p1)[terms.sample]
         psi, pol = cover.psi_jet(ch, terms.corner, xt, 0)
@@ -175,7 +175,7 @@ def _gather_rows(src, src_ptr, rows, dst_ptr, step):
     return out
 
 
-def _shared(model, lattice, classes, by_vertex, ptr_b, ptr_e, ib, ie):
+def _shared(model, lattice, classes, by_vertex, ptr_b, ptr_e, ib, ie, chunk):
     """(data_b, cols_b, data_e, cols_e, eps) with every face class
     (:mod:`.face_classes`) evaluated once, at the template points of its representative
     face, and the rows copied to the samples of all its faces."""
@@ -202,7 +202,7 @@ def _shared(model, lattice, classes, by_vertex, ptr_b, ptr_e, ib, ie):
     qb, qe = _row_layout(topo, deg, face)
     tab_b, tab_e = np.empty(qb[-1]), np.empty(qe[-1])
     mx = _evaluate_rows(model, face, lambda p0, p1: x[p0:p1], qb, qe, by_vertex,
-                        (tab_b, None), (tab_e, None))
+                        (tab_b, None), (tab_e, None), chunk)
     sface = lattice.face
     sorted_vertex = topo.face_vertices[by_vertex].astype(ib)
     Mc = n_monomials(deg[topo.face_vertices[by_vertex]])
@@ -215,8 +215,10 @@ def _shared(model, lattice, classes, by_vertex, ptr_b, ptr_e, ib, ie):
             _gather_rows(pattern, pptr, sface, ptr_e, 0), float(mx[src].min()))
 
 
-def assemble(model, lattice):
+def assemble(model, lattice, chunk: int = CHUNK_SAMPLES):
     """(B csr (P, V), E csr (P, V MMAX), eps) on ``lattice``; eps = min max_v psi_v.
+    ``chunk``: samples evaluated per step (every row is computed alone: the factors are
+    bit for bit the same for every chunk).
 
     Rows are in sample order with sorted column indices (canonical csr). Faces of one
     class (:mod:`.face_classes`) are evaluated once where the classes hold at most
@@ -232,7 +234,7 @@ def assemble(model, lattice):
                                                                   lattice.size_classes))
     if work <= SHARED_FRACTION * P:
         data_b, cols_b, data_e, cols_e, eps = _shared(model, lattice, classes, by_vertex,
-                                                      ptr_b, ptr_e, ib, ie)
+                                                      ptr_b, ptr_e, ib, ie, chunk)
     else:
         # the samples' points chunk by chunk (the same formulas per sample as
         # lattice.map_to_polygon), from parameters not cached on the lattice: neither
@@ -246,7 +248,7 @@ def assemble(model, lattice):
         data_b, cols_b = np.empty(ptr_b[-1]), np.empty(ptr_b[-1], dtype=ib)
         data_e, cols_e = np.empty(ptr_e[-1]), np.empty(ptr_e[-1], dtype=ie)
         mx = _evaluate_rows(model, face, x_of, ptr_b, ptr_e, by_vertex, (data_b, cols_b),
-                            (data_e, cols_e))
+                            (data_e, cols_e), chunk)
         eps = float(mx.min()) if P else np.inf
     B = sp.csr_matrix((data_b, cols_b, ptr_b.astype(ib)), shape=(P, V))
     E = sp.csr_matrix((data_e, cols_e, ptr_e.astype(ie)), shape=(P, V * MMAX))

@@ -16,14 +16,17 @@ from .monomials import monomials
 
 __all__ = ["groups", "corner_terms", "evaluate", "partition_at", "CHUNK"]
 
-CHUNK = 200_000  # sample x corner terms per chunk: ~50 MB of working arrays at nu = 2
+CHUNK = 200_000  # sample x corner terms per chunk at most (default budgets)
 
 
-def groups(topo, corners2d, face_ids, x):
+def groups(topo, corners2d, face_ids, x, chunk: int = CHUNK):
     """Group samples (face_ids (N,), x (N, 2)) by face size, padded per face.
 
-    Yields (n, faces (F,), sel (F, P) sample index or -1, xb (F, P, 2)); padding
-    points sit at the face's centroid (inside, harmless) and have sel = -1.
+    Yields (n, faces (F,), sel (F, P) sample index or -1, xb (F, P, 2)) with at most
+    ``chunk`` padded sample x corner terms F P n per item (at least one face); padding
+    points sit at the face's centroid (inside, harmless) and have sel = -1. Every
+    face's points are computed alone (no sum runs across faces), so the chunking does
+    not change the bits of any result.
     """
     order = np.argsort(face_ids, kind="stable")
     fs = face_ids[order]
@@ -38,7 +41,7 @@ def groups(topo, corners2d, face_ids, x):
         valid = rank < counts[kk][:, None]
         sel = np.where(valid, order[np.minimum(start[kk][:, None] + rank, len(order) - 1)], -1)
         xb = np.where(valid[..., None], x[np.maximum(sel, 0)], cen[faces][:, None, :])
-        per = max(1, CHUNK // (P * n))
+        per = max(1, chunk // (P * n))
         for a in range(0, len(faces), per):
             yield n, faces[a:a + per], sel[a:a + per], xb[a:a + per]
 
@@ -86,10 +89,12 @@ def _blend(Psi, mono, Xu, Cu, nu):
     return res
 
 
-def evaluate(model, X, coef, face_ids, x, nu: int):
+def evaluate(model, X, coef, face_ids, x, nu: int, chunk: int = CHUNK):
     """S and its derivatives up to nu at face points (face_ids (N,), x (N, 2)).
 
-    X (V, k) positions, coef (V, M, k) local-function coefficients. Returns
+    X (V, k) positions, coef (V, M, k) local-function coefficients; ``chunk``: padded
+    sample x corner terms per step (:func:`groups`; the result is bit for bit the same
+    for every chunk). Returns
     ([S (N, k), dS (N, k, 2), d2S (N, k, 2, 2)][:nu + 1], eps) with eps the smallest
     max_v psi_v over the points (> 0: every point is covered).
     """
@@ -97,7 +102,7 @@ def evaluate(model, X, coef, face_ids, x, nu: int):
     out = [np.zeros((N, k)), np.zeros((N, k, 2)), np.zeros((N, k, 2, 2))][:nu + 1]
     eps = np.inf
     M = coef.shape[1]
-    for n, faces, sel, xb in groups(model.topology, model.layouts.corners, face_ids, x):
+    for n, faces, sel, xb in groups(model.topology, model.layouts.corners, face_ids, x, chunk):
         u = model.topology.face_vertices[model.topology.face_offsets[faces][None, :]
                                          + np.arange(n)[:, None]]
         d = int(model.degrees[u].max())

@@ -253,7 +253,7 @@ def repair_mesh(vertices, faces, *, merge_distance=None, rest_positions=None,
     check_finite(X)
     R = None if rest_positions is None else np.asarray(rest_positions, dtype=np.float64)
     if R is not None:
-        check_finite(R)
+        check_finite(R, "rest_positions")
     G = X if R is None else R
     if merge_distance is not None and not (isinstance(merge_distance, (int, float, np.number))
                                            and np.isfinite(merge_distance) and merge_distance >= 0):

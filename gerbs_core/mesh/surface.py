@@ -23,6 +23,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
+from ..kernels.names import as_kernel
 from .agreement import MMAX, FairnessRule, fair_fits
 from .charts import vertex_charts
 from .coupling import SelectedFits
@@ -32,14 +33,14 @@ from .evaluate import evaluate, partition_at
 from .lattice import Lattice, output_counts
 from .lattice_templates import obtuse_flips
 from .layout import face_layouts
-from .memory import memory_estimate
+from .memory import assembly_chunk, evaluation_chunk, memory_estimate
 from .monomials import monomials
 from .repair import repair_mesh
 from .rings import data_rings
 from .stencil import Stencil
-from .surface_inputs import (check_settings, face_points, kernel_setting, points, positive,
-                             unit_normals)
+from .surface_inputs import check_settings, face_points, points, positive, unit_normals
 from .topology import MeshTopology
+from .validation import check_finite
 
 __all__ = ["BlendingSurface", "SurfaceModel"]
 
@@ -82,7 +83,9 @@ class BlendingSurface:
     ----------
     vertices : (V, 3) positions. faces : list of int sequences, (F, k) array or a
         :class:`~gerbs_core.mesh.topology.MeshTopology`.
-    kernel : the GERBS kernel of the size functions (default ``ERBS()``).
+    kernel : the GERBS kernel of the size functions (default ``ERBS()``), or its name
+        (``"erbs"``, ``"bfbs"``, ``"logistic"``, ``"affine"``: default parameters;
+        :func:`gerbs_core.kernels.as_kernel`).
     rest_positions : (V, 3) the rest shape the layouts and fits are bound to
         (default: ``vertices``); the output is a fixed sparse linear function of the
         positions for a fixed topology and rest shape (:meth:`stencil`).
@@ -137,7 +140,7 @@ class BlendingSurface:
         self.repair = repair_mesh(X, faces, merge_distance=merge_distance, rest_positions=rest)
         X, topo = np.array(self.repair.vertices), self.repair.topology
         rest = X if rest is None else np.array(self.repair.rest)
-        kernel = kernel_setting(kernel)
+        kernel = as_kernel(kernel)
         fairness = check_settings(boundary, kappa, shrink, fairness)
         self.memory_budget = positive("memory_budget", memory_budget)
         self.eps0_resolution = positive("eps0_resolution", eps0_resolution, integer=True, lo=1,
@@ -233,11 +236,14 @@ class BlendingSurface:
         return self._coef
 
     def with_positions(self, vertices) -> "BlendingSurface":
-        """The surface of new input positions (V, 3) with the same binding (model shared)."""
+        """The surface of new input positions (V, 3) with the same binding (model shared).
+        Refused as the constructor refuses them: InvalidParameterError (shape),
+        InvalidMeshError ``non_finite`` naming the rows with NaN or infinite coordinates."""
         new = object.__new__(BlendingSurface)
         new.__dict__.update({k: v for k, v in self.__dict__.items() if k != "eps0"})
-        new._X = self.repair.positions(points("vertices", vertices,
-                                               len(self.repair.representative)))
+        X = points("vertices", vertices, len(self.repair.representative))
+        check_finite(X, "vertices")
+        new._X = self.repair.positions(X)
         new._X.flags.writeable = False
         new._coef = new._coefficients(new._X)
         return new
@@ -256,7 +262,8 @@ class BlendingSurface:
         require_cover(eps, self.kernel)
 
     def _evaluate(self, f, x, nu):
-        return evaluate(self.model, self._Xm, self._coef, f, x, nu)
+        return evaluate(self.model, self._Xm, self._coef, f, x, nu,
+                        evaluation_chunk(self.memory_budget, nu))
 
     # ---------------------------------------------------------------- public
     def evaluate_all(self, face_index, local_coords, nu: int = 0):
@@ -304,8 +311,9 @@ class BlendingSurface:
 
     # ---------------------------------------------------------- tessellation
     def memory_estimate(self, resolution: int) -> int:
-        """Bytes a tessellation or stencil at `resolution` is expected to need at peak."""
-        return memory_estimate(self.model, resolution)
+        """Bytes a tessellation or stencil at `resolution` is expected to need at peak (its
+        steps sized for :attr:`memory_budget`, :mod:`gerbs_core.mesh.memory`)."""
+        return memory_estimate(self.model, resolution, self.memory_budget)
 
     def lattice(self, resolution: int):
         """The sample lattice at `resolution` (checked against the memory budget); triangles
@@ -357,12 +365,13 @@ class BlendingSurface:
         from .assembly import assemble
         lat = self.lattice(resolution)
         cut = self.model.crease
+        chunk = assembly_chunk(self.memory_budget, int(self.model.topology.face_sizes.max()))
         if cut is None:
-            base, mono, eps = assemble(self.model, lat)
+            base, mono, eps = assemble(self.model, lat, chunk)
             fits = self.model.fits
         else:
             mlat = Lattice(self.model.topology, resolution)
-            base, mono, eps = assemble(self.model, mlat)
+            base, mono, eps = assemble(self.model, mlat, chunk)
             rows = first_occurrence(cut.sample_map(mlat), lat.n_points)
             # merged crease samples: one row each; the columns of a vertex's copies summed
             base, mono = base[rows] @ cut.copy_matrix, mono[rows]

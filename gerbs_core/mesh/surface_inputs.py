@@ -11,8 +11,7 @@ from .agreement import FairnessRule
 from .charts import BOUNDARY_RULES
 from .repair import _warning as mesh_warning
 
-__all__ = ["points", "positive", "unit_normals", "kernel_setting", "check_settings",
-           "face_points"]
+__all__ = ["points", "positive", "unit_normals", "check_settings", "face_points"]
 
 
 def points(name, a, V=None) -> np.ndarray:
@@ -63,17 +62,6 @@ def unit_normals(normals, V: int, keep):
     if not zero.any():
         return out, None
     return out, mesh_warning("zero_normal", idx[zero], "vertex")
-
-
-def kernel_setting(kernel):
-    """The kernel (default ``ERBS()``), checked to be a :class:`gerbs_core.kernels.Kernel`."""
-    from ..kernels import ERBS, Kernel
-    if kernel is None:
-        return ERBS()
-    if not isinstance(kernel, Kernel):
-        raise InvalidParameterError("kernel", f"must be a gerbs_core.kernels.Kernel, got "
-                                    f"{type(kernel).__name__}")
-    return kernel
 
 
 def check_settings(boundary, kappa, shrink, fairness) -> FairnessRule:

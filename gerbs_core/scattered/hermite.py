@@ -12,6 +12,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError
+from ..kernels.names import as_kernel
 from . import budget as _budget
 from . import covers as _covers
 from .balls import BallCover
@@ -26,11 +27,6 @@ from .star_nd import DelaunayStarCover
 from .taylor import averaged_taylor, coefficient_tables, estimate_derivatives
 
 __all__ = ["GERBSInterpolator"]
-
-
-def _default_kernel():
-    from ..kernels import ERBS
-    return ERBS()
 
 
 class GERBSInterpolator:
@@ -67,7 +63,8 @@ class GERBSInterpolator:
         degree 3, only the third derivatives are estimated). Degree 3 gives O(h^4)
         in the interior and keeps the Taylor extrapolation error small in long thin
         hull simplices (the dominant error of degree 2 near the boundary).
-    kernel : GERBS kernel (default ERBS()).
+    kernel : GERBS kernel (default ERBS()) or its name ("erbs", "bfbs", "logistic",
+        "affine": default parameters; :func:`gerbs_core.kernels.as_kernel`).
     metric : for cover="balls": a :class:`gerbs_core.scattered.metrics.Metric` or any
         form of :func:`gerbs_core.scattered.metric_forms.as_metric` ("euclidean", "l1",
         "linf", ("lp", 3), ("bounded", base), weighted forms, ...). Derivatives
@@ -106,7 +103,7 @@ class GERBSInterpolator:
         N, n = pts.shape
         self.points, self.n, self._tree = pts, n, tree
         self._points_t = np.ascontiguousarray(pts.T)     # coordinate-major, for gathers
-        self.kernel = _default_kernel() if kernel is None else kernel
+        self.kernel = as_kernel(kernel)
         self.fill_value = fill_value
         self.chunk_size = int(chunk_size)
         if not self.chunk_size >= 1:

@@ -32,7 +32,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..kernels import ERBS, Kernel
+from ..kernels import Kernel, as_kernel
 from ..kernels.base import as_float_array, check_order
 from .evaluate import blend_jet, falling_jet, knot_interval, rising_jet
 
@@ -64,19 +64,24 @@ def _check_knots(knots) -> np.ndarray:
 
 
 def _check_kernels(kernel, n_intervals: int):
-    if isinstance(kernel, Kernel):
-        return (kernel,) * n_intervals, kernel
-    if isinstance(kernel, (str, bytes)) or not isinstance(kernel, Sequence):
-        raise InvalidParameterError(
-            "kernel", f"must be a Kernel or a sequence of Kernels, got {type(kernel).__name__}")
+    """(one kernel per interval, the single kernel or None): ``kernel`` a kernel or a name
+    (:func:`~gerbs_core.kernels.as_kernel`), or a sequence of n_intervals of them."""
+    if kernel is None or isinstance(kernel, (Kernel, str, bytes)) or \
+            not isinstance(kernel, Sequence):
+        one = as_kernel(kernel)
+        return (one,) * n_intervals, one
     ks = tuple(kernel)
     if len(ks) != n_intervals:
         raise InvalidParameterError(
             "kernel", f"need one kernel per knot interval ({n_intervals}), got {len(ks)}")
+    out = []
     for i, k in enumerate(ks):
-        if not isinstance(k, Kernel):
-            raise InvalidParameterError("kernel", f"entry {i} is not a Kernel")
-    return ks, None
+        try:
+            out.append(as_kernel(k))
+        except InvalidParameterError as exc:
+            err = InvalidParameterError("kernel", f"entry {i} {str(exc)[len('kernel: '):]}")
+            raise err from None
+    return tuple(out), None
 
 
 class GERBSBasis:
@@ -85,8 +90,8 @@ class GERBSBasis:
     Parameters
     ----------
     knots : (n + 2,) strictly increasing floats (n >= 1).
-    kernel : Kernel, or a sequence of n + 1 Kernels (one per knot interval).
-        Default ERBS().
+    kernel : Kernel or its name (:func:`~gerbs_core.kernels.as_kernel`), or a sequence
+        of n + 1 of them (one per knot interval). Default ERBS().
 
     ``basis(t, nu=0)`` -> array (*t.shape, n): G_j^(nu)(t) for j = 1..n.
     Exactness: as exact as the kernel (ERBS values ~1e-15, derivatives to
@@ -95,8 +100,7 @@ class GERBSBasis:
 
     def __init__(self, knots, kernel: Kernel | Sequence[Kernel] | None = None):
         self._knots = _check_knots(knots)
-        self._kernels, self._kernel = _check_kernels(
-            ERBS() if kernel is None else kernel, self._knots.size - 1)
+        self._kernels, self._kernel = _check_kernels(kernel, self._knots.size - 1)
         self._h = np.diff(self._knots)
 
     @property

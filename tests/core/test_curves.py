@@ -123,7 +123,7 @@ def test_invalid_knots_and_local_curves_name_the_argument():
     with pytest.raises(InvalidParameterError, match="local_curves"):
         GERBSCurve(KNOTS, np.full((5, 2), np.inf))
     with pytest.raises(InvalidParameterError, match="kernel"):
-        GERBSBasis(KNOTS, "erbs")
+        GERBSBasis(KNOTS, "bogus")
     with pytest.raises(InvalidParameterError, match="nu"):
         GERBSBasis(KNOTS)(0.5, 99)
 

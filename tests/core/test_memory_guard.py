@@ -7,6 +7,10 @@ are traced) measured here on Suzanne and a triangle sphere:
     peak <= estimate + 32 MB        (the constant: chunked working arrays, ~20 MB)
     estimate <= 8 * peak            (an upper bound, not a wild one)
 
+With small budgets the evaluation steps shrink (gerbs_core.mesh.memory.work_bytes): a
+small mesh builds within 1e6 bytes, its measured peak within the estimate, and the
+step size changes no bit of the result.
+
 scripts/measure_memory.py measures the same at ~1M points (docs/robustness.md:
 estimate 2.5 GB, tracemalloc peak 0.65 GB, RSS peak 0.78 GB for the stencil).
 """
@@ -26,7 +30,9 @@ FACTOR = 8.0
 
 
 def _estimate(surface, resolution):
-    """The guard's estimate in bytes, as stated by its error for a 1-byte budget."""
+    """The guard's estimate in bytes (for the surface's own budget: the evaluation steps
+    are sized for it), and the refusal of a surface whose budget is below it states it."""
+    est = surface.memory_estimate(resolution)
     tight = surface.with_positions(surface.vertices)
     tight.memory_budget = 1.0
     with pytest.raises(ResourceLimitError) as info:
@@ -34,7 +40,9 @@ def _estimate(surface, resolution):
     msg = str(info.value)
     P, _ = output_counts(surface.topology, resolution)
     assert f"{P} points" in msg and "memory_budget" in msg
-    return float(re.search(r"estimated memory (\d+) MB", msg).group(1)) * 1e6
+    stated = float(re.search(r"estimated memory (\d+) MB", msg).group(1)) * 1e6
+    assert abs(stated - tight.memory_estimate(resolution)) <= 0.5e6
+    return est
 
 
 def _peak(fn):
@@ -88,8 +96,10 @@ def test_budget_is_configurable_per_surface():
     X, faces = primitives.suzanne()
     r = 8
     est = _estimate(BlendingSurface(X, faces), r)
-    below = BlendingSurface(X, faces, memory_budget=0.5 * est)
-    with pytest.raises(ResourceLimitError, match=f"estimated memory {est / 1e6:.0f} MB"):
+    below = BlendingSurface(X, faces, memory_budget=0.3 * est)
+    own = below.memory_estimate(r)      # its steps are smaller, the output is not
+    assert 0.3 * est < own < est
+    with pytest.raises(ResourceLimitError, match=f"estimated memory {own / 1e6:.0f} MB"):
         below.stencil(r)
     above = BlendingSurface(X, faces, memory_budget=2.0 * est)
     assert above.stencil(r).shape[0] == output_counts(above.topology, r)[0]
@@ -101,3 +111,88 @@ def test_default_budget_refuses_absurd_resolutions_with_python_int_counts():
     surface = BlendingSurface(X, faces)
     with pytest.raises(ResourceLimitError, match="points"):
         surface.tessellate(10**9)
+
+
+def _warm_peak(fn):
+    """tracemalloc peak of fn() run a second time (the first pays one-off imports and
+    template caches, which no budget is about)."""
+    fn()
+    return _peak(fn)
+
+
+@pytest.mark.parametrize("mesh,resolution,budget", [("icosphere1", 2, 1e6), ("cube", 4, 1e6),
+                                                     ("suzanne", 2, 6e6)])
+def test_a_small_mesh_builds_within_a_small_budget(mesh, resolution, budget):
+    """Budgets down to the add-on's and the CLI's minimum (1e6 bytes) build small meshes
+    (the evaluation steps shrink with the budget: a fixed 64 MB step refused every mesh
+    below ~64 MB), the measured peak stays within the estimate and the budget, and the
+    result is bit for bit the default budget's."""
+    X, faces = {"icosphere1": primitives.icosphere(1), "cube": primitives.icosphere(0),
+                "suzanne": primitives.suzanne()}[mesh]
+    small = BlendingSurface(X, faces, memory_budget=budget)
+    big = BlendingSurface(X, faces)
+    est = small.memory_estimate(resolution)
+    assert est <= budget
+    for stage in ("stencil", "tessellate"):
+        run = (lambda s: s.stencil(resolution).apply(X)) if stage == "stencil" else \
+            (lambda s: s.tessellate(resolution))
+        out, peak = _warm_peak(lambda: run(small))
+        assert peak <= est <= budget, (stage, peak, est)
+        ref = run(big)
+        for a, b in zip(out if stage == "tessellate" else [out],
+                        ref if stage == "tessellate" else [ref]):
+            assert np.array_equal(a, b), stage       # bit for bit
+
+
+def test_the_step_size_never_changes_a_bit():
+    """Evaluation (nu = 0, 1, 2) and the stencil's factors at step sizes from one face to
+    all at once: the same bits (Suzanne: mixed degrees 2..4 across the steps)."""
+    from gerbs_core.mesh.assembly import assemble
+    from gerbs_core.mesh.evaluate import evaluate
+
+    X, faces = primitives.suzanne()
+    s = BlendingSurface(X, faces)
+    lat = s.lattice(3)
+    x = lat.map_to_polygon(s.layouts.corners)
+    for nu in (0, 1, 2):
+        ref, eps = evaluate(s.model, s.vertices, s.coefficients, lat.face, x, nu, 10**9)
+        for chunk in (1, 500, 20_000):
+            out, e = evaluate(s.model, s.vertices, s.coefficients, lat.face, x, nu, chunk)
+            assert e == eps and all(np.array_equal(a, b) for a, b in zip(out, ref))
+    B0, E0, eps0 = assemble(s.model, lat, 10**9)
+    for chunk in (1, 777):
+        B, E, eps = assemble(s.model, lat, chunk)
+        assert eps == eps0
+        for m, m0 in ((B, B0), (E, E0)):
+            assert np.array_equal(m.indptr, m0.indptr) and np.array_equal(m.indices, m0.indices)
+            assert np.array_equal(m.data, m0.data)
+
+
+def test_a_mesh_too_large_for_a_small_budget_is_still_refused():
+    X, faces = primitives.suzanne()
+    surface = BlendingSurface(X, faces, memory_budget=1e6)
+    for stage in ("stencil", "tessellate"):
+        with pytest.raises(ResourceLimitError, match=r"resolution 4: \d+ points, estimated "
+                           r"memory \d+ MB exceeds the budget 1 MB \(memory_budget\)"):
+            getattr(surface, stage)(4)
+
+
+def test_steps_are_sized_for_the_budget():
+    """A quarter of the budget, between the floor and the default step (64 MB); the
+    estimate counts one whole face when a face's step is larger (high resolutions)."""
+    from gerbs_core.mesh import memory
+
+    assert memory.work_bytes(1e6) == memory.MIN_WORK_BYTES
+    assert memory.work_bytes(40e6) == 10e6
+    assert memory.work_bytes(2e9) == memory.CHUNK_BYTES
+    assert memory.evaluation_chunk(40e6, 2) < memory.evaluation_chunk(40e6, 1) \
+        < memory.evaluation_chunk(40e6, 0)
+    X, faces = primitives.icosphere(0)
+    s = BlendingSurface(X, faces, memory_budget=1e6)
+    r = 40           # one triangle's step: 861 samples x 3 corners x 1600 B = 4.1 MB
+    step = memory.face_step_bytes(s.topology, r)
+    assert step == 3 * 861 * memory.BYTES_PER_TERM[1]
+    assert step > memory.work_bytes(1e6)
+    # the same output with 64 MB steps: the estimates differ by the steps exactly
+    diff = memory.memory_estimate(s.model, r, None) - s.memory_estimate(r)
+    assert abs(diff - (memory.CHUNK_BYTES - step)) <= 1

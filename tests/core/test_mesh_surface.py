@@ -147,7 +147,7 @@ def test_bad_input_and_caller_arrays_untouched():
         BlendingSurface(bad, F)
     assert e.value.problem == "non_finite" and 4 in e.value.indices
     with pytest.raises(InvalidParameterError, match="kernel"):
-        BlendingSurface(V, F, kernel="erbs")
+        BlendingSurface(V, F, kernel="bogus")
     for name, kw in (("memory_budget", {"memory_budget": float("nan")}),
                      ("memory_budget", {"memory_budget": -1}),
                      ("eps0_resolution", {"eps0_resolution": 0}),

@@ -35,8 +35,9 @@ def test_curve_exposes_its_basis_knots_and_local_curves_read_only():
 
 
 def test_a_kernel_list_with_a_non_kernel_names_its_entry():
-    with pytest.raises(InvalidParameterError, match="entry 2 is not a Kernel") as exc:
-        GERBSBasis(KNOTS, [ERBS(), ERBS(), "erbs", ERBS(), ERBS(), ERBS()])
+    with pytest.raises(InvalidParameterError, match="entry 2 must be a gerbs_core.kernels.Kernel "
+                       "or one of") as exc:
+        GERBSBasis(KNOTS, [ERBS(), ERBS(), 3, ERBS(), ERBS(), ERBS()])
     assert exc.value.name == "kernel"
 
 

@@ -188,3 +188,49 @@ def test_stencil_factors_are_canonical_csr_and_small():
     W = st.matrix()
     print("entries per row: B + E", (st.base.nnz + st.mono.nnz) / W.shape[0], "W", W.nnz / W.shape[0])
     assert st.base.nnz + st.mono.nnz < W.nnz
+
+
+def _refusal(fn, cls):
+    with pytest.raises(cls) as info:
+        fn()
+    return info.value
+
+
+def test_non_finite_positions_are_refused_alike_everywhere():
+    """The constructor, with_positions and the stencil's apply refuse NaN / infinite
+    positions with one error: InvalidMeshError ``non_finite`` naming the argument and
+    the input rows, each said once (they used to be accepted silently by the last two:
+    NaN points out)."""
+    from gerbs_core.errors import InvalidMeshError
+
+    V, F = P.icosphere(1)
+    s = BlendingSurface(V, F)
+    st = s.stencil(2)
+    bad = V.copy()
+    bad[3, 1], bad[7, 2] = np.nan, -np.inf
+    for fn, name in ((lambda: BlendingSurface(bad, F), "vertices"),
+                     (lambda: BlendingSurface(V, F, rest_positions=bad), "rest_positions"),
+                     (lambda: s.with_positions(bad), "vertices"),
+                     (lambda: st.apply(bad), "X")):
+        err = _refusal(fn, InvalidMeshError)
+        assert (err.problem, err.element, err.name) == ("non_finite", "vertex", name)
+        assert err.indices == (3, 7)
+        assert str(err) == f"{name}: NaN or infinite coordinates at indices [3, 7]"
+    err = _refusal(lambda: st.apply(bad[:, 1]), InvalidMeshError)   # one column (V,)
+    assert err.indices == (3,) and str(err) == "X: NaN or infinite coordinates at indices [3]"
+    assert np.abs(st.apply(V) - s.tessellate(2)[0]).max() <= 1e-12   # finite input: as before
+
+
+def test_apply_with_the_wrong_vertex_count_names_x_and_both_counts():
+    from gerbs_core.errors import InvalidParameterError
+
+    V, F = P.icosphere(1)
+    st = BlendingSurface(V, F).stencil(2)
+    for X, got in ((V[:-1], 41), (np.vstack([V, V[:1]]), 43), (V[:, 0][:-2], 40)):
+        err = _refusal(lambda: st.apply(X), InvalidParameterError)
+        assert err.name == "X"
+        assert f"{len(V)} rows, got {got}" in str(err)
+    err = _refusal(lambda: st.apply(3.0), InvalidParameterError)
+    assert err.name == "X" and "42 rows, got 0" in str(err)
+    err = _refusal(lambda: st.apply("abc"), InvalidParameterError)
+    assert err.name == "X" and "real (42, k) array" in str(err)
