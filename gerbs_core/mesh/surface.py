@@ -89,8 +89,8 @@ class BlendingSurface:
     rest_positions : (V, 3) the rest shape the layouts and fits are bound to
         (default: ``vertices``); the output is a fixed sparse linear function of the
         positions for a fixed topology and rest shape (:meth:`stencil`).
-    boundary : ``"keep"`` (boundary vertices keep their angles: flat meshes are
-        reproduced exactly) or ``"straighten"`` (the border passes smoothly through
+    boundary : ``"keep"`` (boundary vertices keep their angles: a flat mesh stays
+        in its plane; a mesh one face wide bulges in it, a single square by 0.6%) or ``"straighten"`` (the border passes smoothly through
         boundary vertices; mesh corners get rounded).
     normals : optional (V, 3) vertex normals as Hermite data: the tangent plane of l_v
         is orthogonal to n_v (the surface is then not W @ X: no stencil). Finite at
