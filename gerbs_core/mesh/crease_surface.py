@@ -20,6 +20,7 @@ from .cover import star_cover
 from .crease_fits import corner_scales, curve_constraints
 from .creases import crease_cut
 from .layout import face_layouts
+from .memory import check_build
 from .rings import data_rings
 
 __all__ = ["crease_input", "build_model", "first_occurrence", "merge_tessellation",
@@ -136,10 +137,12 @@ def crease_input(repair, faces, creases, corners):
     return cut if (cut.edge_weight.any() or cut.vertex_weight.any()) else None
 
 
-def build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink, exact_gauge):
+def build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink, exact_gauge,
+                budget):
     """The parts of a SurfaceModel of the cut mesh (layouts, charts, cover, degrees, fits):
     crease chart scales, fixed end-line scales at crease rays, the tension raised at creases
-    and the curve constraints (docs/design.md, "Creases")."""
+    and the curve constraints (docs/design.md, "Creases"); ``budget``: the memory budget
+    the construction is checked against (:func:`gerbs_core.mesh.memory.check_build`)."""
     mtopo, mrest = cut.topology, cut.positions(rest)
     layouts = face_layouts(mtopo, mrest)
     sharp = cut.sharpness(face_sharpness(topo, rest, fairness.sharp_from, fairness.sharp_to))
@@ -148,6 +151,7 @@ def build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink, exac
     cover = star_cover(mtopo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge,
                        cut.crease_ends())
     rings = data_rings(mtopo, charts, layouts.corners)
+    check_build(mtopo.face_sizes, budget, len(rings.ids))
     cons = None
     if cut.any_cut:
         def cons(degrees):

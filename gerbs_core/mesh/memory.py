@@ -22,7 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["memory_estimate", "work_bytes", "evaluation_chunk", "assembly_chunk",
+from ..errors import ResourceLimitError
+
+__all__ = ["memory_estimate", "build_estimate", "check_build", "work_bytes", "evaluation_chunk", "assembly_chunk",
            "face_step_bytes", "BYTES_PER_SAMPLE", "BYTES_PER_ENTRY", "BYTES_PER_VERTEX",
            "CHUNK_BYTES",
            "MIN_WORK_BYTES", "WORK_FRACTION", "BYTES_PER_TERM", "ASSEMBLY_BYTES_PER_TERM"]
@@ -38,6 +40,21 @@ WORK_FRACTION = 0.25      # ... else this share of the memory budget
 # (measured on Suzanne, a grid and an icosphere, degrees up to 4: <= ~600, 1400, 3400 B)
 BYTES_PER_TERM = (800, 1600, 4000)
 ASSEMBLY_BYTES_PER_TERM = 400   # of an assembly step (measured <= ~330 B), margin
+# the construction (layouts, charts, cover, candidate fits, choice, coupling), measured
+# with tracemalloc (docs/robustness.md): a fixed part, per ring datum (rings 1-2 of every
+# vertex: 2.2 kB on grids, 2.7 kB on a 35k triangle mesh and an icosphere, 3.4 kB on
+# Suzanne with the fixed part) and per n^3 of every face of n corners (every corner of an
+# n-gon is active almost everywhere in it and reads all the others: one 128 / 256 / 384-gon
+# 0.19 / 1.37 / 4.43 GB, 67-69 B per n^3); the n^2 part is the stages before the fits
+# (a 1024-gon: 0.19 GB before its fits)
+BUILD_BASE_BYTES = 32e6
+BUILD_BYTES_PER_DATUM = 3000
+BUILD_BYTES_PER_N3 = 75
+BUILD_BYTES_PER_N2 = 250
+# the construction is needed by every output, so a small budget (sized for the output:
+# down to 1 MB in the add-on) does not refuse it: it may use the larger of the budget and
+# this (the default budget)
+BUILD_MIN_BUDGET = 2.0e9
 
 
 def work_bytes(budget=None) -> float:
@@ -89,3 +106,31 @@ def memory_estimate(model, resolution: int, budget=None) -> int:
     step = max(work_bytes(budget), face_step_bytes(topo, resolution))
     return int(P * (BYTES_PER_SAMPLE + BYTES_PER_ENTRY * nnz)
                + BYTES_PER_VERTEX * int(topo.n_vertices) + step)
+
+
+def build_estimate(face_sizes, n_data: int = 0) -> int:
+    """Bytes the construction of a surface needs at peak (an upper bound, within 5-80 % of
+    the measured peaks: see the constants), from the faces' sizes (F,) and the number of
+    ring data ``n_data`` (0 before the rings are known: the part the faces alone give)."""
+    n = np.asarray(face_sizes, dtype=np.float64)
+    return int(BUILD_BASE_BYTES + BUILD_BYTES_PER_N2 * np.sum(n ** 2)
+               + BUILD_BYTES_PER_N3 * np.sum(n ** 3) + BUILD_BYTES_PER_DATUM * int(n_data))
+
+
+def check_build(face_sizes, budget: float, n_data: int = 0) -> None:
+    """ResourceLimitError naming the estimate, the limit and the largest face when
+    :func:`build_estimate` exceeds the larger of ``budget`` and ``BUILD_MIN_BUDGET``:
+    checked before the stages it bounds, so a
+    mesh with huge n-gons is refused before it allocates (a 512-gon would take ~10 GB, a
+    1024-gon ~80 GB), never run into the machine's memory."""
+    est = build_estimate(face_sizes, n_data)
+    limit = max(float(budget), BUILD_MIN_BUDGET)
+    if est <= limit:
+        return
+    n = np.asarray(face_sizes, dtype=np.float64)
+    hint = (f"; its largest face has {int(n.max())} corners and the build's memory grows as "
+            f"the cube of a face's corners: split large faces (Triangulate or Poke Faces)"
+            if BUILD_BYTES_PER_N3 * np.sum(n[n > 4] ** 3) > 0.25 * est else "")
+    raise ResourceLimitError(f"the surface build needs an estimated {est / 1e6:.0f} MB, over "
+                             f"the limit {limit / 1e6:.0f} MB (memory_budget, at least "
+                             f"{BUILD_MIN_BUDGET / 1e6:.0f} MB for the build){hint}")

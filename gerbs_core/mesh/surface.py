@@ -33,7 +33,7 @@ from .evaluate import evaluate, partition_at
 from .lattice import Lattice, output_counts
 from .lattice_templates import obtuse_flips
 from .layout import face_layouts
-from .memory import assembly_chunk, evaluation_chunk, memory_estimate
+from .memory import assembly_chunk, check_build, evaluation_chunk, memory_estimate
 from .monomials import monomials
 from .repair import repair_mesh
 from .rings import data_rings
@@ -101,6 +101,10 @@ class BlendingSurface:
     exact_gauge : the exact (kinked) star radius: a deliberately non-smooth variant,
         the control of the smoothness tests.
     memory_budget : bytes a tessellation or stencil may use (ResourceLimitError beyond).
+        The construction itself is checked against the larger of it and 2 GB before it
+        allocates (:func:`gerbs_core.mesh.memory.check_build`: faces of many corners cost
+        memory as the cube of their size; a 512-gon is refused, not run into the
+        machine's memory).
     eps0_resolution : lattice resolution of the cover-thickness check :attr:`eps0`.
     merge_distance : None (default) or a distance: weld vertices closer than it first.
     creases : optional edge crease weights in [0, 1] (Blender's ``crease_edge``) on INPUT
@@ -149,18 +153,20 @@ class BlendingSurface:
         self._normals, normal_warning = (None, None) if normals is None else \
             unit_normals(normals, len(self.repair.representative), self.repair.vertex_map)
         self._warnings = self.repair.warnings + ((normal_warning,) if normal_warning else ())
+        check_build(topo.face_sizes, self.memory_budget)
         cut = crease_input(self.repair, faces, creases, corners)
         if cut is None:
             layouts = face_layouts(topo, rest)
             charts = vertex_charts(topo, layouts.corners, layouts.angles, boundary)
             cover = star_cover(topo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge)
             rings = data_rings(topo, charts, layouts.corners)
+            check_build(topo.face_sizes, self.memory_budget, len(rings.ids))
             degrees, fits = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
             degrees.flags.writeable = False
             self.model = SurfaceModel(topo, layouts, charts, cover, degrees, fits, boundary)
         else:
             parts = build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink,
-                                exact_gauge)
+                                exact_gauge, self.memory_budget)
             self.model = SurfaceModel(cut.topology, *parts, boundary, cut)
         self._X = X
         self._X.flags.writeable = False

@@ -124,3 +124,23 @@ def test_too_large_resolution_is_an_error_not_a_crash(blender):
     with pytest.raises(GERBSSyncError, match="memory"):
         api.add_surface(obj, resolution=64, memory_budget=1e6)
     assert np.array_equal(evaluated(obj), X)
+
+
+def test_a_huge_ngon_is_refused_before_its_build_not_run_out_of_memory(blender):
+    """Blender's Circle with 512 vertices, filled as one n-gon: the construction would need
+    ~10 GB (memory grows as the cube of a face's corners), so it is refused at once with
+    the remedy named, the modifier shows its input and the mesh is untouched."""
+    from blender_addon import api
+    from blender_addon.api import GERBSSyncError
+
+    bpy.ops.mesh.primitive_circle_add(vertices=512, fill_type="NGON")
+    obj = bpy.context.active_object
+    X = positions(obj.data)
+    offsets, corners = topology(obj.data)
+    with pytest.raises(GERBSSyncError, match="512 corners.*Poke Faces"):
+        api.add_surface(obj)
+    assert "512 corners" in obj.modifiers[0].node_warnings[0].message
+    assert np.array_equal(evaluated(obj), X)
+    assert np.array_equal(positions(obj.data), X)
+    o2, c2 = topology(obj.data)
+    assert np.array_equal(o2, offsets) and np.array_equal(c2, corners)

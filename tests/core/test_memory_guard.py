@@ -196,3 +196,58 @@ def test_steps_are_sized_for_the_budget():
     # the same output with 64 MB steps: the estimates differ by the steps exactly
     diff = memory.memory_estimate(s.model, r, None) - s.memory_estimate(r)
     assert abs(diff - (memory.CHUNK_BYTES - step)) <= 1
+
+
+def _circle(n):
+    t = 2 * np.pi * np.arange(n) / n
+    return np.c_[np.cos(t), np.sin(t), 0 * t], [list(range(n))]
+
+
+def _cylinder(n):
+    t = 2 * np.pi * np.arange(n) / n
+    ring = np.c_[np.cos(t), np.sin(t)]
+    V = np.r_[np.c_[ring, -np.ones(n)], np.c_[ring, np.ones(n)]]
+    F = [[i, (i + 1) % n, n + (i + 1) % n, n + i] for i in range(n)]
+    return V, F + [list(range(n))[::-1], list(range(n, 2 * n))]
+
+
+@pytest.mark.parametrize("mesh", ["suzanne", "cylinder64", "circle128"])
+def test_the_build_estimate_bounds_the_measured_build_peak(mesh):
+    """gerbs_core.mesh.memory.build_estimate (faces and ring data) against the tracemalloc
+    peak of the construction: an upper bound, and not a wild one (a 128-gon's build is
+    dominated by its n^3 term: 191 MB measured)."""
+    from gerbs_core.mesh.memory import build_estimate
+    from gerbs_core.mesh.rings import data_rings
+
+    X, faces = {"suzanne": primitives.suzanne(), "cylinder64": _cylinder(64),
+                "circle128": _circle(128)}[mesh]
+    s, peak = _peak(lambda: BlendingSurface(X, faces))
+    m = s.model
+    est = build_estimate(m.topology.face_sizes,
+                         len(data_rings(m.topology, m.charts, m.layouts.corners).ids))
+    assert peak <= est <= 3.0 * peak, (peak, est)
+
+
+def test_a_huge_ngon_is_refused_before_its_build_allocates():
+    """One 512-gon would need ~10 GB to build (a 384-gon: 4.4 GB measured): refused at
+    once, naming the estimate, the limit and the remedy, having allocated almost nothing;
+    a larger budget lets the same check pass (it is the budget's, not a size cap)."""
+    from gerbs_core.mesh.memory import build_estimate, check_build
+
+    X, faces = _circle(512)
+    with pytest.raises(ResourceLimitError, match=r"needs an estimated \d+ MB, over the limit "
+                       r"2000 MB \(memory_budget.*largest face has 512 corners.*Poke Faces"):
+        BlendingSurface(X, faces)
+    tracemalloc.start()
+    try:
+        with pytest.raises(ResourceLimitError):
+            BlendingSurface(X, faces)
+        assert tracemalloc.get_traced_memory()[1] < 20e6
+    finally:
+        tracemalloc.stop()
+    # a small budget (for the output) does not refuse an ordinary build; a large one
+    # raises the build's limit
+    BlendingSurface(*primitives.suzanne(), memory_budget=1e6)
+    check_build([512], 2 * build_estimate([512]))
+    with pytest.raises(ResourceLimitError):
+        check_build([512], 0.5 * build_estimate([512]))

@@ -103,3 +103,26 @@ def test_sharp_mu_prototype_is_the_rule_mu_when_constant(suzanne, monkeypatch):
     assert np.abs(const["points"] - ref).max() < 1e-10
     base = methods.gerbs_samples(V, F, 2, exact=False)["points"]
     assert np.abs(S.sp450t70(V, F, 2, exact=False)["points"] - base).max() > 1e-4
+
+
+def test_ngon_fan_prototype_passes_through_the_vertices_and_the_face_points(monkeypatch):
+    """scripts/shape/proto/ngon_fan.py (docs/design.md, "Known limits"): a 16-sided
+    cylinder's caps fanned about their corners' mean; the surface passes through every
+    cage vertex and both face points."""
+    from scipy.spatial import cKDTree
+
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    fan = importlib.import_module("shape.proto.ngon_fan")
+    n = 16
+    t = 2 * np.pi * np.arange(n) / n
+    ring = np.c_[np.cos(t), np.sin(t)]
+    V = np.r_[np.c_[ring, -np.ones(n)], np.c_[ring, np.ones(n)]]
+    F = [[i, (i + 1) % n, n + (i + 1) % n, n + i] for i in range(n)]
+    F += [list(range(n))[::-1], list(range(n, 2 * n))]
+    V2, F2 = fan.fanned(V, F)
+    assert len(V2) == 2 * n + 2 and len(F2) == n + 2 * n
+    assert np.allclose(V2[-2:], [[0, 0, -1], [0, 0, 1]])
+    P = fan.variant(V, F, 2, exact=False)["points"]
+    d, _ = cKDTree(P).query(V2)
+    assert d.max() < 1e-12
+    assert max(len(f) for f in F2) == 4
