@@ -24,7 +24,8 @@ import numpy as np
 
 from ..errors import ResourceLimitError
 
-__all__ = ["memory_estimate", "build_estimate", "check_build", "work_bytes", "evaluation_chunk", "assembly_chunk",
+__all__ = ["memory_estimate", "build_estimate", "check_build", "work_bytes",
+           "evaluation_chunk", "assembly_chunk",
            "face_step_bytes", "BYTES_PER_SAMPLE", "BYTES_PER_ENTRY", "BYTES_PER_VERTEX",
            "CHUNK_BYTES",
            "MIN_WORK_BYTES", "WORK_FRACTION", "BYTES_PER_TERM", "ASSEMBLY_BYTES_PER_TERM"]
@@ -120,9 +121,9 @@ def build_estimate(face_sizes, n_data: int = 0) -> int:
 def check_build(face_sizes, budget: float, n_data: int = 0) -> None:
     """ResourceLimitError naming the estimate, the limit and the largest face when
     :func:`build_estimate` exceeds the larger of ``budget`` and ``BUILD_MIN_BUDGET``:
-    checked before the stages it bounds, so a
-    mesh with huge n-gons is refused before it allocates (a 512-gon would take ~10 GB, a
-    1024-gon ~80 GB), never run into the machine's memory."""
+    checked before the stages it bounds, so a mesh with huge n-gons is refused before it
+    allocates (a 512-gon would take ~10 GB, a 1024-gon ~80 GB), never run into the
+    machine's memory."""
     est = build_estimate(face_sizes, n_data)
     limit = max(float(budget), BUILD_MIN_BUDGET)
     if est <= limit:
