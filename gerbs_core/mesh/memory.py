@@ -17,6 +17,10 @@ so the estimate counts the larger of the working set and one face's step
 (:func:`face_step_bytes`). The step size never changes a bit of the results (every
 face's, every sample's values are computed alone). An upper bound: tests/core/
 test_memory_guard.py and scripts/measure_memory.py compare it with measured peaks.
+
+The construction (the model: layouts to coupled fits) has its own bound,
+:func:`build_estimate`, checked by :func:`check_build` before the stages it bounds: it is
+dominated by the ring data on ordinary meshes and by n^3 on faces of many corners.
 """
 from __future__ import annotations
 
