@@ -47,3 +47,17 @@ def variant(V, F, r, exact=True):
 def variant8(V, F, r, exact=True):
     V2, F2 = fanned(V, F, 8)
     return gerbs_samples(V2, F2, r, exact=exact)
+
+
+def _with(**rule):
+    import gerbs_core
+
+    def run(V, F, r, exact=True):
+        V2, F2 = fanned(V, F)
+        return gerbs_samples(V2, F2, r, exact=exact, fairness=gerbs_core.FairnessRule(**rule))
+    return run
+
+
+lam30 = _with(lam=30.0)
+lam10 = _with(lam=10.0)
+lam0 = _with(lam=0.0)
