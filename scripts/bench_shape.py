@@ -18,7 +18,9 @@ Cone, UV Sphere, Torus and Monkey with default parameters (Cylinder and Cone
 also at 2r: the "@16" rows); real meshes (examples/suzanne.obj, MeshLab's cow,
 airplane, bone, and bunny10k with ``--only bunny10k`` or ``--only real``: it
 adds about a minute; also Catmull-Clark level 2 there, the acceptance's
-reference). See scripts/shape/measure.py for every figure and the verdict block
+reference); with ``--only proportions``, Blender's Cylinder as a coin (depth 0.2), a
+tower (depth 10) and with three loop cuts (not in the default run, nor in the
+acceptance: GERBS's known limit, docs/design.md). See scripts/shape/measure.py for every figure and the verdict block
 for the acceptance of issue 11. ``--quick``: a subset (no level-4 sphere, no
 48x32 torus, no real mesh but Suzanne).
 

@@ -30,6 +30,12 @@ TORUS_SIZES = ((12, 8), (24, 16), (48, 32))
 BLENDER = {"cube": ("primitive_cube_add", None), "cylinder": ("primitive_cylinder_add", None),
            "cone": ("primitive_cone_add", None), "uvsphere": ("primitive_uv_sphere_add", UnitSphere()),
            "btorus": ("primitive_torus_add", Torus(1.0, 0.25)), "monkey": ("primitive_monkey_add", None)}
+# Blender's Cylinder in other proportions (not in the default run: ``--only proportions``):
+# name -> (operator keyword arguments, loop cuts along its height). Subdivision is affine
+# invariant, so the peers' box ratios are the default Cylinder's at every proportion;
+# GERBS's local functions are not (docs/design.md, "Known limits")
+PROPORTIONS = {"coin": ({"depth": 0.2}, 0), "tower": ({"depth": 10.0}, 0),
+               "cylinder-cuts": ({}, 3)}
 SAMPLES = "pymeshlab/tests/sample_meshes"
 REAL = {"suzanne": ROOT / "examples" / "suzanne.obj", "cow": "cow.obj", "airplane": "airplane.obj",
         "bone": "bone.ply", "bunny10k": "bunny10k_textured.obj"}
@@ -39,10 +45,12 @@ GROUPS = {
     "heightfield": ["hf-quad", "hf-tri"],
     "blender": ["cube", "cylinder", "cylinder@16", "cone", "cone@16", "uvsphere", "btorus", "monkey"],
     "real": list(REAL),
+    "proportions": list(PROPORTIONS),
 }
 ORDER = [n for g in GROUPS.values() for n in g]
 # the default run: everything but bunny10k (about a minute more; --only bunny10k or real)
-DEFAULT = [n for n in ORDER if n != "bunny10k"]
+# and the proportions
+DEFAULT = [n for n in ORDER if n != "bunny10k" and n not in PROPORTIONS]
 QUICK = ["ico1", "ico2", "ico3", "torus12x8", "torus24x16", "hf-quad", "hf-tri", "cube",
          "cylinder", "cylinder@16", "cone", "cone@16", "suzanne"]
 # refinement sequences whose observed orders are reported: name -> members
@@ -102,14 +110,24 @@ def height_field_mesh(kind: str, n: int = 12, seed: int = 7):
     return V, F
 
 
-def blender_primitive(bpy, op: str):
-    """(V, faces) of a Blender primitive added with default parameters, the faces in
-    Blender's order -- except the UV sphere's, which Blender emits in a different
-    order at every call (bpy 5.0.1): those are sorted by their vertex sets (corner
-    order kept), since the GERBS surface depends on the face order."""
+def blender_primitive(bpy, op: str, cuts: int = 0, **params):
+    """(V, faces) of a Blender primitive added with default parameters (or ``params``),
+    the faces in Blender's order -- except the UV sphere's, which Blender emits in a
+    different order at every call (bpy 5.0.1): those are sorted by their vertex sets
+    (corner order kept), since the GERBS surface depends on the face order. ``cuts``:
+    that many loop cuts across the vertical edges (a Cylinder's sides in cuts + 1 rows)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    getattr(bpy.ops.mesh, op)()
+    getattr(bpy.ops.mesh, op)(**params)
     me = bpy.context.active_object.data
+    if cuts:
+        import bmesh
+        bm = bmesh.new()
+        bm.from_mesh(me)
+        vertical = [e for e in bm.edges
+                    if abs(e.verts[0].co.z - e.verts[1].co.z) > 1e-6]
+        bmesh.ops.subdivide_edges(bm, edges=vertical, cuts=cuts, use_grid_fill=False)
+        bm.to_mesh(me)
+        bm.free()
     V = np.empty(3 * len(me.vertices))
     me.vertices.foreach_get("co", V)
     faces = [tuple(p.vertices) for p in me.polygons]
@@ -177,6 +195,10 @@ def build_cases(bpy, names, notes):
         elif name.startswith("hf-"):
             V, F = height_field_mesh(name[3:])
             out.append(Case(name, V, F, "heightfield", WAVE, margin=2.0 / 12))
+        elif base in PROPORTIONS:
+            params, cuts = PROPORTIONS[base]
+            V, F = blender_primitive(bpy, "primitive_cylinder_add", cuts, **params)
+            out.append(Case(name, V, F, "proportions", None))
         elif base in BLENDER:
             op, exact = BLENDER[base]
             if base not in cache:

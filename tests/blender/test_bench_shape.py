@@ -90,3 +90,24 @@ def test_a_broken_variant_is_caught(run):
 def test_unknown_input_is_refused(tmp_path):
     out = bench("--only", "no_such_mesh", cwd=tmp_path)
     assert out.returncode != 0 and "unknown input 'no_such_mesh'" in out.stderr
+
+
+def test_proportions_are_blenders_cylinder_in_other_proportions(monkeypatch):
+    """The ``proportions`` inputs (docs/design.md, "Known limits") are what they claim:
+    the coin 0.2 deep, the tower 10 deep, the loop-cut Cylinder in 4 rows of side quads,
+    each a closed Cylinder of radius 1 with two 32-gon caps; none in the default run."""
+    import bpy
+    import numpy as np
+
+    monkeypatch.syspath_prepend(str(ROOT / "scripts"))
+    from shape import inputs
+
+    cases = {c.name: c for c in inputs.build_cases(bpy, inputs.expand(["proportions"]), [])}
+    assert set(cases) == {"coin", "tower", "cylinder-cuts"}
+    for name, depth, rows in (("coin", 0.2, 1), ("tower", 10.0, 1), ("cylinder-cuts", 2.0, 4)):
+        V, F = cases[name].V, cases[name].F
+        assert np.ptp(V[:, 2]) == pytest.approx(depth, abs=1e-6)
+        assert np.hypot(V[:, 0], V[:, 1]) == pytest.approx(1.0, abs=1e-6)
+        assert len(V) == 32 * (rows + 1)
+        assert sorted(len(f) for f in F)[-2:] == [32, 32] and len(F) == 32 * rows + 2
+    assert not set(cases) & set(inputs.DEFAULT)
