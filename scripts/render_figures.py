@@ -10,7 +10,7 @@ Blender figures (real ``bpy``, Cycles on the CPU; OpenImageDenoise when samples 
                                 mesh edges drawn on the surface; second row: close-ups
   zebra_crease                  reflection lines: GERBS with one edge loop fully creased |
                                 the same mesh without creases
-  zebra_peers_suzanne, zebra_peers_torus, zebra_peers_cylinder
+  zebra_peers_suzanne, zebra_peers_torus, zebra_peers_cylinder, zebra_peers_coin
                                 reflection lines: GERBS | Modified Butterfly (MeshLab, pymeshlab)
                                 | Catmull-Clark (Subdivision Surface), matched output density
 Plots (matplotlib, Agg; the optional ``docs`` extra):
@@ -43,7 +43,8 @@ from figures import gerbs  # noqa: E402
 
 BLENDER_FIGURES = ("suzanne", "icosphere", "mixed", "zebra_subsurf", "zebra_kinked",
                    "zebra_crease",
-                   "zebra_peers_suzanne", "zebra_peers_torus", "zebra_peers_cylinder")
+                   "zebra_peers_suzanne", "zebra_peers_torus", "zebra_peers_cylinder",
+                   "zebra_peers_coin")
 PLOT_FIGURES = ("kernels", "partition", "convergence")
 ALL_FIGURES = BLENDER_FIGURES + PLOT_FIGURES
 
@@ -122,12 +123,19 @@ def _cylinder():
     return cylinder()
 
 
+def _coin():
+    from gerbs_core.datasets.primitives import cylinder
+
+    return cylinder(depth=0.2)
+
+
 # GERBS | Butterfly | Catmull-Clark, one camera: the peers at `level` steps (full, quick),
 # GERBS at the resolution whose output count is closest to theirs (figures/peers.py)
 PEER_SCENES = {
     "zebra_peers_suzanne": dict(mesh=_suzanne, view=(0.45, -1.6, 0.45), stripes=12.0, zoom=0.88),
     "zebra_peers_torus": dict(mesh=_torus, view=(0.5, -1.2, 1.3), stripes=12.0, zoom=0.95),
     "zebra_peers_cylinder": dict(mesh=_cylinder, view=(0.9, -1.5, 1.0), stripes=10.0, zoom=0.9),
+    "zebra_peers_coin": dict(mesh=_coin, view=(1.0, -1.6, 0.45), stripes=10.0, zoom=0.9),
 }
 PEER_LEVEL = (3, 1)
 
