@@ -107,10 +107,31 @@ class Stencil:
         """points += the change of the output when the vertices ``moved`` (m,) move by
         ``delta`` (m, k), in place, touching only the affected rows (exact up to round-off:
         the same sums regrouped). Needs only the moved vertices' columns of the
-        coefficient operator (:meth:`CoupledFits.columns`), never the whole operator."""
+        coefficient operator (:meth:`CoupledFits.columns`), never the whole operator.
+
+        Refused before ``points`` is touched: ``moved`` outside [0, V) or repeated
+        (InvalidParameterError ``moved``), ``delta`` with another row count than ``moved``
+        (InvalidParameterError ``delta``), NaN or infinite ``delta`` (InvalidMeshError
+        ``non_finite`` naming ``delta``): a bad drag step never corrupts the points."""
+        V = self.base.shape[1]
+        moved = np.asarray(moved).ravel()
+        if moved.dtype.kind not in "iu" or (len(moved) and (moved.min() < 0 or moved.max() >= V)):
+            raise InvalidParameterError("moved", f"must be vertex indices in [0, {V}), got "
+                                        f"{moved[:8].tolist()}{'...' if len(moved) > 8 else ''}")
+        if len(np.unique(moved)) != len(moved):
+            raise InvalidParameterError("moved", "must not repeat a vertex")
+        try:
+            delta = np.asarray(delta, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InvalidParameterError("delta", f"must be a real ({len(moved)}, k) array, got "
+                                        f"{type(delta).__name__}") from None
+        if delta.ndim not in (1, 2) or len(delta) != len(moved):
+            raise InvalidParameterError("delta", f"must have one row per moved vertex: "
+                                        f"{len(moved)} rows, got shape {delta.shape}")
+        check_finite(delta, "delta")
         hit, dW = self.moved_columns(moved)
         if len(hit):
-            points[hit] += dW @ np.asarray(delta, dtype=np.float64)
+            points[hit] += dW @ delta
 
     def moved_columns(self, moved) -> tuple[np.ndarray, sp.csr_matrix]:
         """(hit (h,) the output rows the vertices ``moved`` (m,) reach, dW (h, m) csr:

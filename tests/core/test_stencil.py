@@ -234,3 +234,33 @@ def test_apply_with_the_wrong_vertex_count_names_x_and_both_counts():
     assert err.name == "X" and "42 rows, got 0" in str(err)
     err = _refusal(lambda: st.apply("abc"), InvalidParameterError)
     assert err.name == "X" and "real (42, k) array" in str(err)
+
+
+def test_a_bad_drag_step_is_refused_and_leaves_the_points_untouched():
+    """Stencil.apply_moved (the drag path) refuses NaN / infinite deltas, a delta with
+    another row count than ``moved``, and moved indices outside the mesh or repeated,
+    before writing: the points stay bit-identical (they used to become NaN, or scipy's
+    shape error came after nothing / the repeated vertex counted twice)."""
+    from gerbs_core.errors import InvalidMeshError, InvalidParameterError
+
+    V, F = P.icosphere(1)
+    st = BlendingSurface(V, F).stencil(2)
+    pts = st.apply(V)
+    keep = pts.copy()
+    nan_delta = np.array([[0.0, np.nan, 0.0], [0.1, 0.0, 0.0]])
+    err = _refusal(lambda: st.apply_moved(pts, np.array([2, 5]), nan_delta), InvalidMeshError)
+    assert (err.problem, err.name, err.indices) == ("non_finite", "delta", (0,))
+    for moved, delta, name, text in (
+            (np.array([2, 5]), np.zeros((3, 3)), "delta", "2 rows, got shape (3, 3)"),
+            (np.array([2, 42]), np.zeros((2, 3)), "moved", "[0, 42)"),
+            (np.array([-1]), np.zeros((1, 3)), "moved", "[0, 42)"),
+            (np.array([2.0]), np.zeros((1, 3)), "moved", "vertex indices"),
+            (np.array([2, 2]), np.zeros((2, 3)), "moved", "repeat")):
+        err = _refusal(lambda: st.apply_moved(pts, moved, delta), InvalidParameterError)
+        assert err.name == name and text in str(err), str(err)
+    assert np.array_equal(pts, keep)
+    # a valid step still works and equals the full product
+    Y = V.copy()
+    Y[[2, 5]] += [[0.0, 0.02, 0.0], [0.01, 0.0, -0.01]]
+    st.apply_moved(pts, np.array([2, 5]), (Y - V)[[2, 5]])
+    assert np.abs(pts - st.apply(Y)).max() <= 1e-13
