@@ -52,7 +52,7 @@ from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomials, n_monomials
 from .row_values import (candidate_coefs, candidate_values, chunks, copy_aliases, own_rows,
                          per_degree, row_sums, square_norms)
-from .spread_fits import SPREAD, gate, spread_candidates
+from .spread_fits import SPREAD, gate, spread_candidates, spread_faces
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
 
@@ -88,17 +88,28 @@ class FairnessRule:
     candidates: tuple = CANDIDATES
     # stars spreading above this many degrees get an extra candidate (mesh.spread_fits)
     spread: float = SPREAD
+    # the agreement weight of the coupling's rows, spread_mu x mu, on faces having a
+    # corner whose star spreads above spread_mu_from degrees (the folds' stars: Suzanne's ears and mouth,
+    # the cow's hooves; above the Cylinder's rims and the Cone's apex, 63.4, and the
+    # Cube's corners, 54.7, which stay at mu). Measured (bench_shape, r = 8): Suzanne
+    # 80 / 6 / 117 -> 76 / 4 / 119, cow 140 / 55 / 178 -> 126 / 50 / 176, the Cone's
+    # largest dihedral 34.2 -> 31.9 degrees, every other input identical; 1.5 x mu
+    # everywhere grows the Cube to 1.48x (docs/design.md "Folds", sharp_mu)
+    spread_mu: float = 1.5
+    spread_mu_from: float = 70.0
 
     def __post_init__(self):
         from ..errors import InvalidParameterError
-        for name in ("mu", "lam", "fold"):
+        for name in ("mu", "lam", "fold", "spread_mu"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
                 raise InvalidParameterError(name, f"must be finite and >= 0, got {v!r}")
         if not (np.isfinite(self.fold_cos) and -1 <= self.fold_cos <= 1):
             raise InvalidParameterError("fold_cos", f"must be in [-1, 1], got {self.fold_cos!r}")
-        if not (np.isfinite(self.spread) and 0 <= self.spread <= 180):
-            raise InvalidParameterError("spread", f"must be in [0, 180], got {self.spread!r}")
+        for name in ("spread", "spread_mu_from"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and 0 <= v <= 180):
+                raise InvalidParameterError(name, f"must be in [0, 180], got {v!r}")
         if not (0 <= self.sharp_from < self.sharp_to <= 180):
             raise InvalidParameterError("sharp_from", "need 0 <= sharp_from < sharp_to <= 180")
         if not (0 < self.damping <= 1):
@@ -351,7 +362,21 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
         proj = None if cons is None else cons.projection(normals, rings.h, degrees, MMAX)
         return degrees, identity_fits(chosen, proj)
     return degrees, coupled_fits(chosen, rhs, normals, degrees, smp, rule, rings.h, DMAX,
-                                 cons)
+                                 cons, mu=row_mu(topo, X, smp, rule))
+
+
+def row_mu(topo, X, smp, rule: FairnessRule) -> np.ndarray | float:
+    """The coupling's agreement weight: (SC,) per energy row, ``rule.spread_mu * rule.mu``
+    on the faces of stars spreading above ``rule.spread_mu_from`` degrees
+    (:func:`gerbs_core.mesh.spread_fits.spread_faces`) and ``rule.mu`` elsewhere; the
+    scalar ``rule.mu`` where no face qualifies (smooth meshes: bit-identical). A function
+    of the rest shape only, so the fits stay linear in the positions."""
+    if rule.spread_mu == 1.0 or rule.mu == 0.0:
+        return rule.mu
+    hit = spread_faces(topo, X, rule.spread_mu_from)
+    if not hit.any():
+        return rule.mu
+    return np.where(hit[smp.face], rule.spread_mu * rule.mu, rule.mu)
 
 
 def _chosen_fits(cands, choice, V, coupled):

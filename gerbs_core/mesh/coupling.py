@@ -286,7 +286,7 @@ def _same_pattern(m, like):
 
 
 def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
-                 constraints=None) -> CoupledFits:
+                 constraints=None, mu=None) -> CoupledFits:
     """The coupled fits (module docstring), with optional linear ``constraints``
     (:class:`gerbs_core.mesh.crease_fits.CurveConstraints`) imposed after the first fit and
     every sweep in the metric of the coupled normal matrices.
@@ -295,14 +295,17 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     right-hand sides of their scaled normal equations; normals (V, MMAX, MMAX) their
     normal matrices (scaled coordinates, zero-padded); degrees (V,); smp the energies'
     samples (:class:`gerbs_core.mesh.agreement._Samples`); rule the FairnessRule; h (V,)
-    the fit scales; dmax the padded layout's degree (MMAX = n_monomials(dmax)).
+    the fit scales; dmax the padded layout's degree (MMAX = n_monomials(dmax)); mu the
+    agreement weight, a scalar or (SC,) per row (default ``rule.mu``;
+    :func:`gerbs_core.mesh.agreement.row_mu`).
     """
     V = len(degrees)
     mmax = n_monomials(dmax)
     deg = monomial_exponents(dmax).sum(1)
     SC, L = len(smp.vertex), smp.n_samples
     P, w, s = smp.psi, smp.weight, smp.sharp
-    wa = rule.mu * w * P * (1.0 - P)                  # agreement weight of each row
+    mu = rule.mu if mu is None else mu
+    wa = mu * w * P * (1.0 - P)                       # agreement weight of each row
     wt = rule.lam * w * s * P                         # tension weight
     # the rows' monomials, only those of each vertex's own degree (the others have zero
     # coefficients): Bu (SC, V MMAX) csr and the scaled Bs^T (V MMAX, SC) csc, built
@@ -342,8 +345,8 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
         "agg": sp.csc_matrix((P, gather.indices, one), shape=(L, SC)),
         "Wt": _diagonal(wt, one),
         "Wa": _diagonal(wa, one),
-        "Dp": _diagonal(rule.mu * w * P, one),
-        "Dpp": _diagonal(rule.mu * w * P * P, one),
+        "Dp": _diagonal(mu * w * P, one),
+        "Dpp": _diagonal(mu * w * P * P, one),
     }
     proj = None if constraints is None else constraints.projection(N, h, degrees, mmax)
     return CoupledFits(chosen, rule.sweeps, rule.damping, parts, proj)

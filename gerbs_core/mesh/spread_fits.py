@@ -28,7 +28,7 @@ from .arrays import ranges
 from .fits import CandidateFits, pinned_normal_inverse
 from .monomials import monomial_exponents, monomials, n_monomials
 
-__all__ = ["SPREAD", "star_spread", "spread_candidates", "gate"]
+__all__ = ["SPREAD", "star_spread", "spread_faces", "spread_candidates", "gate"]
 
 SPREAD = 60.0           # degrees: a star spreads above this (rule.spread overrides)
 RULE = (4, 2)           # degree and data rings of the extra candidate
@@ -50,6 +50,14 @@ def star_spread(topo, X) -> np.ndarray:
     out = np.zeros(topo.n_vertices)
     np.maximum.at(out, fv, ang)
     return out
+
+
+def spread_faces(topo, X, spread: float) -> np.ndarray:
+    """(F,) bool: the faces having a corner whose cage star spreads above ``spread``
+    degrees (:func:`star_spread`, rest positions X (V, 3))."""
+    hit = np.zeros(topo.n_faces, bool)
+    hit[topo.corner_face[(star_spread(topo, X) > spread)[topo.face_vertices]]] = True
+    return hit
 
 
 def _ring_rows(rings, verts, layers, M):

@@ -46,6 +46,9 @@ VARIANTS = {
     "no-caps": {"spoke_caps": False},
     # without the extra candidate at spread stars (gerbs_core.mesh.spread_fits)
     "no-spread": {"fairness": gerbs_core.FairnessRule(spread=180.0)},
+    # the coupling's agreement as strong at spread stars as elsewhere (the default
+    # until 2026-12-04; gerbs_core.mesh.agreement.row_mu)
+    "no-spread-mu": {"fairness": gerbs_core.FairnessRule(spread_mu=1.0)},
 }
 
 

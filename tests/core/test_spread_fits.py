@@ -32,15 +32,28 @@ def suzanne_parts():
     return s, rings, extra, spiky
 
 
+NO_MU = FairnessRule(spread_mu=1.0)  # the spread stars' rows coupled as every other row
+
+
 def test_suzanne_has_fewer_folds_with_the_extra_candidates():
-    # measured at r = 8: 80 / 6 pairs above 60 / 90 degrees against 82 / 12 without (the
-    # ear rims 313 / 314 and the mouth corners 139 / 140 take the cage-aware quartic)
+    # measured at r = 8 (without the spread stars' coupling weight, to see the candidate
+    # alone): 80 / 6 pairs above 60 / 90 degrees against 82 / 12 without (the ear rims
+    # 313 / 314 and the mouth corners 139 / 140 take the cage-aware quartic)
     V, F = P.suzanne()
-    new, old = _folds(V, F), _folds(V, F, OFF)
+    new, old = _folds(V, F, NO_MU), _folds(V, F, FairnessRule(spread=180.0, spread_mu=1.0))
     print("Suzanne r = 8 above 60 / 90: with", new["above_60"], new["above_90"],
           "without", old["above_60"], old["above_90"])
     assert new["above_90"] <= 8 < old["above_90"]
     assert new["above_60"] <= old["above_60"]
+
+
+def test_suzanne_has_fewer_folds_with_the_spread_stars_coupling_weight():
+    # the default's 1.5 x mu on the faces of stars spreading above 70 degrees
+    # (agreement.row_mu): measured at r = 8, 76 / 4 against 80 / 6 above 60 / 90 degrees
+    V, F = P.suzanne()
+    new, old = _folds(V, F), _folds(V, F, NO_MU)
+    assert new["above_90"] < old["above_90"] and new["above_60"] < old["above_60"]
+    assert new["above_90"] <= 4
 
 
 def test_extra_rows_only_at_spread_stars_and_linear(suzanne_parts):
@@ -91,6 +104,23 @@ def test_smooth_meshes_get_no_extra_candidate_and_stay_bit_identical(make):
     assert spread_candidates(m.topology, m.charts, a.layouts.corners, rings, a.vertices)[0] == []
     assert np.array_equal(a.tessellate(4)[0], b.tessellate(4)[0])
     assert np.array_equal(a.coefficients, b.coefficients)
+    c = BlendingSurface(V, F, fairness=NO_MU)       # nor a spread star's coupling weight
+    assert np.array_equal(a.coefficients, c.coefficients)
+
+
+@pytest.mark.parametrize("make", [P.cube, P.cylinder])
+def test_primitives_rims_keep_the_common_coupling_weight(make):
+    """Blender's Cube (corners spread 54.7 degrees) and Cylinder (rims 63.3) lie below
+    spread_mu_from (70): their surfaces are bit-identical with and without the spread
+    stars' weight (the weight at their rims grows the Cube to 1.48x); lowering the
+    threshold below them changes the surface (the control: the weight is applied where a
+    star qualifies). The Cone's apex spreads 86.5 degrees: its surface changes (largest
+    dihedral at r = 8 34.2 -> 31.9 degrees, bench_shape)."""
+    V, F = make()
+    a = BlendingSurface(V, F)
+    assert np.array_equal(a.coefficients, BlendingSurface(V, F, fairness=NO_MU).coefficients)
+    low = BlendingSurface(V, F, fairness=FairnessRule(spread_mu_from=50.0))
+    assert np.abs(low.coefficients - a.coefficients).max() > 1e-6
 
 
 def test_spread_setting_is_checked():
@@ -99,3 +129,8 @@ def test_spread_setting_is_checked():
         FairnessRule(spread=-1.0)
     with pytest.raises(InvalidParameterError):
         FairnessRule(spread=float("nan"))
+    for kw, name in (({"spread_mu_from": 181.0}, "spread_mu_from"),
+                     ({"spread_mu": -1.0}, "spread_mu"), ({"spread_mu": np.inf}, "spread_mu")):
+        with pytest.raises(InvalidParameterError) as info:
+            FairnessRule(**kw)
+        assert info.value.name == name

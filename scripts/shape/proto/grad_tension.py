@@ -47,7 +47,7 @@ def face_gradients(topo, corners2d):
                          shape=(2 * topo.n_faces, topo.n_vertices))
 
 
-def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None,
+def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None, mu=None,
             _old=ag.coupled_fits):
     """ag.coupled_fits with the gradient term: its normal matrices added to the chosen fits'
     (``normals``, block diagonal per vertex) and its right-hand side to theirs (``rhs``),
@@ -55,7 +55,7 @@ def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None,
     if OPTS["inner"] is not None:      # the ridge prototype's coupling (with_ridges)
         _old = OPTS["inner"]
     if not OPTS["lam_g"] or not (rule.sweeps and (rule.mu or rule.lam)):
-        return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints)
+        return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints, mu=mu)
     topo, charts, corners2d, cover, X = OPTS["ctx"]
     sharp = smp.sharp
     if OPTS["g_from"] is not None:     # its own sharpness ramp (degrees), not the tension's

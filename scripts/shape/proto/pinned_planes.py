@@ -52,8 +52,8 @@ def _min_cos(coef, topo, fn, V, mmax):
     return out
 
 
-def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None):
-    fits = _coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints)
+def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None, mu=None):
+    fits = _coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints, mu=mu)
     topo, X = OPTS["ctx"]
     if constraints is not None or topo is None:
         return fits
@@ -71,7 +71,7 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=
                       shape=(len(rows), V * mmax))
     G = chosen.tocsr()[rows]
     cons = CurveConstraints(K, G, np.repeat(vs, 2))
-    return _coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, cons)
+    return _coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, cons, mu=mu)
 
 
 def fair_fits(topo, charts, corners2d, cover, rings, X, *args, **kw):

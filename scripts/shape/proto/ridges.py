@@ -132,7 +132,7 @@ def first_minimum(E, tie=ag.TIE, _old=ag.first_minimum):
     return _old(E, tie)
 
 
-def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None,
+def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None, mu=None,
             _old=ag.coupled_fits):
     if OPTS["index"] is not None:
         rows = _ridge_rows(smp.vertex)
@@ -141,7 +141,7 @@ def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None,
         Bu[rows] = OPTS["ridges"].basis(vr, smp.y[rows], h)[0]
         import dataclasses
         smp = dataclasses.replace(smp, Bu=Bu)        # smp.Bs = Bu / h_v^|m| follows
-    return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints)
+    return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints, mu=mu)
 
 
 # ------------------------------------------------------------ patches of the evaluation

@@ -4,12 +4,9 @@ sample row's mu is mu_row = mu_smooth (1 - s) + mu_sharp s for its face sharpnes
 that helps the folds and the smooth inputs (mu 450, docs/design.md "Folds") without the
 Cube's and the Cylinder's growth (their faces are all fully sharp: mu_sharp there).
 
-The coupling (:func:`gerbs_core.mesh.coupling.coupled_fits`) reads mu only as
-``rule.mu * w`` (the agreement rows) and w only there and in the tension
-``lam * w * s``: scaling each row's quadrature weight w by f = mu_row / rule.mu and its
-sharpness s by 1 / f gives exactly the per-row mu with the tension unchanged, with no
-copy of the coupling. mu_row depends on the rest shape only, so the map stays linear in
-X. The choice (:func:`gerbs_core.mesh.agreement._choose`) does not read mu (its
+The coupling (:func:`gerbs_core.mesh.coupling.coupled_fits`) takes a per-row ``mu``;
+this prototype's replaces the default's. mu_row depends on the rest shape only, so the
+map stays linear in X. The choice (:func:`gerbs_core.mesh.agreement._choose`) does not read mu (its
 agreement is unweighted against lam * tension): untouched.
 
 Measured (docs/design.md "Folds"): the Cube's, the Cylinder's and the Cone's faces are
@@ -17,8 +14,8 @@ all fully sharp, so those are bit for bit the default's, but mu_smooth alone (s4
 gives none of mu 450's fold gain: it lies on the sharp rows (the reverse, r450, has all of
 it and the Cube's 1.48). What separates the folds from the primitives' rims is the cage
 star's spread (``mu_spread``: the rows on faces of stars above ``spread`` degrees, the
-Cylinder's rim and the Cone's apex 63.4, the Cube's corners 54.7): sp450t70."""
-import dataclasses
+Cylinder's rim and the Cone's apex 63.4, the Cube's corners 54.7): sp450t70, the
+default since 2026-12-04 (FairnessRule.spread_mu, spread_mu_from)."""
 import sys
 from pathlib import Path
 
@@ -49,18 +46,17 @@ def row_mu(smp, mu_smooth: float, mu_sharp: float, rows: str = "row") -> np.ndar
     return mu_smooth * (1.0 - s) + mu_sharp * s
 
 
-def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None,
+def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None, mu=None,
             _old=cp.coupled_fits):
-    """coupled_fits with the per-row mu (module docstring)."""
+    """coupled_fits with this prototype's per-row mu (module docstring), in place of the
+    default's (gerbs_core.mesh.agreement.row_mu, which promoted sp450t70)."""
     if rule.mu <= 0:
-        return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints)
+        return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints, mu=mu)
     mu = row_mu(smp, OPTS["mu_smooth"], OPTS["mu_sharp"], OPTS["rows"])
     if OPTS["mu_spread"] is not None:
         hit = SC.spread_faces(SC.OPTS["topo"], SC.OPTS["X"], OPTS["spread"])
         mu = np.where(hit[smp.face], OPTS["mu_spread"], mu)
-    f = mu / rule.mu
-    smp = dataclasses.replace(smp, weight=smp.weight * f, sharp=smp.sharp / f)
-    return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints)
+    return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints, mu=mu)
 
 
 def patched(**opts):

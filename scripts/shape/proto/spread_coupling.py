@@ -12,28 +12,19 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 from shape.patching import patching, run_variant  # noqa: E402
 import gerbs_core.mesh.agreement as ag  # noqa: E402
 import gerbs_core.mesh.coupling as cp  # noqa: E402
-from gerbs_core.mesh.spread_fits import star_spread  # noqa: E402
+from gerbs_core.mesh.spread_fits import spread_faces, star_spread  # noqa: E402
 
 OPTS = {"beta": 3.0, "spread": 60.0, "topo": None, "X": None, "rows": "face"}
 
 
-def spread_faces(topo, X, spread: float) -> np.ndarray:
-    """(F,) bool: the faces touching a vertex whose cage star spreads above ``spread``
-    degrees (rest positions X)."""
-    spiky = star_spread(topo, X) > spread
-    hit = np.zeros(topo.n_faces, bool)
-    hit[topo.corner_face[spiky[topo.face_vertices]]] = True
-    return hit
-
-
-def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None, _old=cp.coupled_fits):
+def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None, mu=None, _old=cp.coupled_fits):
     topo, X = OPTS["topo"], OPTS["X"]
     if OPTS["rows"] == "face":
         hit = spread_faces(topo, X, OPTS["spread"])[smp.face]
     else:
         hit = (star_spread(topo, X) > OPTS["spread"])[smp.vertex]
     smp = dataclasses.replace(smp, weight=smp.weight * np.where(hit, OPTS["beta"], 1.0))
-    return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints)
+    return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints, mu=mu)
 
 
 def fair_fits(topo, charts, corners2d, cover, rings, X, rule, sharp=None, constraints=None,
