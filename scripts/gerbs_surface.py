@@ -53,7 +53,21 @@ class _Parser(argparse.ArgumentParser):
         raise UserError(message)
 
 
+def kernel_options() -> dict:
+    """{setting key: (kernel label, its SocketSpec)} of every kernel parameter, from the
+    core's one table of kernels (through the add-on's settings): the ``--alpha`` ...
+    ``--bfbs-right`` options."""
+    from blender_addon import ids
+
+    specs = {s.key: s for s in ids.SETTINGS}
+    return {key: (ids.KERNELS[name], specs[key])
+            for name, keys in ids.KERNEL_PARAMETERS.items() for key in keys}
+
+
 def parse_args(argv):
+    from blender_addon import ids
+    from gerbs_core.kernels import KERNELS
+
     p = _Parser(description="GERBS blending surface of a mesh file (headless Blender)")
     p.add_argument("input", nargs="?", type=Path, default=SAMPLE,
                    help=f"mesh file {INPUTS} (default: the bundled {SAMPLE.relative_to(ROOT)})")
@@ -62,12 +76,14 @@ def parse_args(argv):
                         "current directory)")
     p.add_argument("--resolution", type=int, default=4,
                    help="segments per mesh edge, 1..64 (default 4)")
-    p.add_argument("--kernel", default="erbs", choices=["erbs", "bfbs", "logistic", "affine"])
-    p.add_argument("--boundary", default="keep", choices=["keep", "straighten"])
-    for name in ("alpha", "beta", "gamma", "lam", "sigma"):
-        p.add_argument(f"--{name}", type=float, default=None, help=f"ERBS parameter {name}")
-    p.add_argument("--bfbs-left", type=int, default=None, help="BFBS exponent i_left (default 2)")
-    p.add_argument("--bfbs-right", type=int, default=None, help="BFBS exponent i_right (default 2)")
+    p.add_argument("--kernel", default="erbs", choices=list(KERNELS),
+                   help="how each vertex's patch blends into its neighbours (default erbs)")
+    p.add_argument("--boundary", default="keep", choices=list(ids.BOUNDARIES))
+    for key, (label, spec) in kernel_options().items():
+        integer = spec.socket_type == "NodeSocketInt"
+        p.add_argument(f"--{key.replace('_', '-')}", type=int if integer else float,
+                       default=None, help=f"{label} parameter {spec.name!r}, {spec.min:g}.."
+                                          f"{spec.max:g} (default {spec.default:g})")
     p.add_argument("--memory-budget", type=float, default=None, metavar="MB",
                    help="largest memory a build may use, in MB (default 2000)")
     p.add_argument("--merge-distance", type=float, default=None, metavar="D",
@@ -95,7 +111,7 @@ def settings_from(args) -> dict:
     from blender_addon import settings as settings_mod
 
     values = dict(resolution=args.resolution, kernel=args.kernel, boundary=args.boundary)
-    for name in ("alpha", "beta", "gamma", "lam", "sigma", "bfbs_left", "bfbs_right"):
+    for name in kernel_options():
         if getattr(args, name) is not None:
             values[name] = getattr(args, name)
     if args.merge_distance is not None:  # the core's merge by distance (settings "merge")
