@@ -21,7 +21,8 @@ Safety: paths are checked before anything is read (the output may not be the
 input, a directory, or below a file; a glTF input may only reference files in
 its own folder), the result is exported into a temporary folder beside the
 output and renamed into place (a .gltf and its .bin side by side), and no
-output file may replace a file the input uses. Every problem the user can cause
+output file may replace a file the input uses; the output's folder must exist (only
+the default ``out/`` is made). Every problem the user can cause
 ends in one ``error: ...`` line on stderr and exit status 2 with nothing written
 (the input is never written).
 """
@@ -72,8 +73,9 @@ def parse_args(argv):
     p.add_argument("input", nargs="?", type=Path, default=SAMPLE,
                    help=f"mesh file {INPUTS} (default: the bundled {SAMPLE.relative_to(ROOT)})")
     p.add_argument("-o", "--output", type=Path, default=None,
-                   help=f"output {OUTPUTS} (default: out/<input name>_gerbs.glb under the "
-                        "current directory)")
+                   help=f"output {OUTPUTS}, in an existing folder (default: "
+                        "out/<input name>_gerbs.glb under the current directory, out/ made "
+                        "if need be)")
     p.add_argument("--resolution", type=int, default=4,
                    help="segments per mesh edge, 1..64 (default 4)")
     p.add_argument("--kernel", default="erbs", choices=list(KERNELS),
@@ -97,7 +99,8 @@ def parse_args(argv):
                         "groups, glTF split normals)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
-    if args.output is None:
+    args.default_output = args.output is None  # only the default's folder is made
+    if args.default_output:
         args.output = Path("out") / f"{args.input.stem}_gerbs.glb"
     if args.merge_distance is not None and not args.merge_distance >= 0:  # (also NaN)
         raise UserError(f"--merge-distance must be >= 0, got {args.merge_distance}")
@@ -164,6 +167,9 @@ def check_paths(args) -> tuple[Path, Path]:
         ancestor = ancestor.parent
     if not ancestor.is_dir():
         raise UserError(f"cannot write {args.output}: {ancestor} is not a directory")
+    if ancestor != out.parent and not args.default_output:  # a typo is not a request to mkdir
+        raise UserError(f"cannot write {args.output}: its folder {args.output.parent} does "
+                        f"not exist; create it first")
     return src, out
 
 
@@ -290,15 +296,17 @@ def mark_creases(bpy, obj, angle=None, sharp=False) -> int:
 
 # --- export ---------------------------------------------------------------------
 
-def export_mesh(bpy, objects, out: Path, protected) -> None:
+def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -> None:
     """Export into a temporary folder beside `out`, then rename every file into
-    place (sidecars first); refuse if one would replace a `protected` file."""
+    place (sidecars first); refuse if one would replace a `protected` file. The folder
+    of `out` must exist unless `make_folder` (the default output's ``out/``)."""
     bpy.ops.object.select_all(action="DESELECT")
     for obj in objects:
         obj.select_set(True)
     bpy.context.view_layer.objects.active = objects[0]
     try:
-        out.parent.mkdir(parents=True, exist_ok=True)
+        if make_folder:
+            out.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=".gerbs-", dir=out.parent))
     except OSError as exc:
         raise UserError(f"cannot write {out}: {exc.strerror}") from None
@@ -362,7 +370,7 @@ def run(args, src: Path, out: Path, protected) -> None:
                       f"{info['triangles']} triangles in {info['build_seconds']:.2f} s",
                       file=sys.stderr)
         bpy.context.view_layer.update()
-        export_mesh(bpy, objects, out, protected)
+        export_mesh(bpy, objects, out, protected, make_folder=args.default_output)
     finally:
         blender_addon.unregister()
 
