@@ -199,7 +199,9 @@ SETTINGS = (
                "Merge by Distance: vertices closer than this become one, and the surface "
                "passes through it once (0: only coincident ones)"),
     SocketSpec("memory_budget", "Memory Budget (MB)", "NodeSocketFloat", 2000.0, 1.0, 1.0e6,
-               "Largest memory (MB) a build may use; larger builds are refused with an error",
+               "Largest memory (MB) the output (the surface's stencil) may use; the "
+               "construction before it may use the larger of this and 2000 MB. A larger "
+               "build is refused with an error",
                scale=1.0e6, shape=False),
 )
 INTERNAL = (

@@ -87,7 +87,9 @@ def parse_args(argv):
                        default=None, help=f"{label} parameter {spec.name!r}, {spec.min:g}.."
                                           f"{spec.max:g} (default {spec.default:g})")
     p.add_argument("--memory-budget", type=float, default=None, metavar="MB",
-                   help="largest memory a build may use, in MB (default 2000)")
+                   help="largest memory the output (stencil or tessellation) may use, in "
+                        "MB; the construction before it may use the larger of this and "
+                        "2000 MB (default 2000)")
     p.add_argument("--merge-distance", type=float, default=None, metavar="D",
                    help="weld vertices closer than D (0: only coincident ones) before "
                         "building, e.g. seams split by an exporter; off by default")
