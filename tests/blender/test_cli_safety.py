@@ -50,6 +50,7 @@ def _import_vertices(path: Path) -> int:
 
 @pytest.mark.parametrize("name", ["rel.gltf", "sub/dir/rel.gltf", "./up/../rel2.gltf"])
 def test_gltf_with_relative_or_bare_name_lands_beside_its_buffer(blender, tmp_path, name):
+    os.makedirs(os.path.normpath(tmp_path / name).rsplit(os.sep, 1)[0], exist_ok=True)
     out = cli(SUZANNE, "-o", name, "--resolution", "2", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     gltf = (tmp_path / name).resolve()
