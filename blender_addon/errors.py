@@ -36,8 +36,10 @@ class OperationError(GERBSError, RuntimeError):
 def format_error(exc: Exception) -> str:
     """One line naming the problem and where it is (for panels, reports, the log)."""
     if isinstance(exc, InvalidMeshError):
-        where = f"{exc.element} indices {list(exc.indices[:10])}" if exc.indices else "the mesh"
-        return f"{PREFIX}invalid mesh ({exc.problem}) at {where}: {exc}"
+        # the core's text is whole: "<problem>: what is wrong <element words> [indices]";
+        # say the tag once and leave the indices where the text names what they count
+        text = str(exc).removeprefix(f"{exc.problem}: ")
+        return f"{PREFIX}invalid mesh ({exc.problem}): {text}"
     if isinstance(exc, ResourceLimitError):
         return f"{PREFIX}too large: {exc}"
     if isinstance(exc, GERBSError):

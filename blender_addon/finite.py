@@ -40,7 +40,7 @@ def non_finite(inp):
         kind = "vertex group" if layer.group else "attribute"
         what = "" if layer.group else f" ({layer.domain} {layer.data_type})"
         exc = InvalidMeshError(PROBLEM, f'{PROBLEM}: NaN or infinite values of {kind} '
-                                        f'"{layer.name}"{what} at {plural(element)}', bad, element)
+                                        f'"{layer.name}"{what} at {element} indices', bad, element)
         exc.layer = layer.name
         if layer.domain == "EDGE":
             exc.edges = [tuple(int(v) for v in inp.carried.edge_verts[e]) for e in bad]

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .core import module as _core_module
+
 ADDON_ID = "gerbs_blending_surface"  # extension id (blender_manifest.toml)
 ADDON_NAME = "GERBS Blending Surface"
 
@@ -114,8 +116,10 @@ DEFORM_ONLY = ("ARMATURE", "CAST", "CORRECTIVE_SMOOTH", "CURVE", "DISPLACE", "HO
 STALE_MESSAGE = ("GERBS: the surface is out of date with this mesh or its settings, so the "
                  "base mesh is shown; enable the GERBS Blending Surface add-on to update it")
 
-# enum-like settings: python value -> menu item label (in this order)
-KERNELS = {"erbs": "ERBS", "bfbs": "BFBS", "logistic": "Logistic", "affine": "Affine"}
+# enum-like settings: python value -> menu item label (in this order); the kernels are
+# the core's one table of kernel names (gerbs_core.kernels.KERNELS)
+_CORE_KERNELS = _core_module("kernels").KERNELS
+KERNELS = {name: entry.label for name, entry in _CORE_KERNELS.items()}
 BOUNDARIES = {"keep": "Keep", "straighten": "Straighten"}
 REST_SHAPES = {"follow": "Follow", "bound": "Bound"}
 
@@ -195,7 +199,9 @@ SETTINGS = (
                "Merge by Distance: vertices closer than this become one, and the surface "
                "passes through it once (0: only coincident ones)"),
     SocketSpec("memory_budget", "Memory Budget (MB)", "NodeSocketFloat", 2000.0, 1.0, 1.0e6,
-               "Largest memory (MB) a build may use; larger builds are refused with an error",
+               "Largest memory (MB) the output (the surface's stencil) may use; the "
+               "construction before it may use the larger of this and 2000 MB. A larger "
+               "build is refused with an error",
                scale=1.0e6, shape=False),
 )
 INTERNAL = (
@@ -214,8 +220,12 @@ INTERNAL = (
                description="Names of the carried attributes, end to end (internal)"),
 )
 # settings drawn by the add-on's panel only (not in the modifier's own input list)
-KERNEL_PARAMETERS = {"erbs": ("alpha", "beta", "gamma", "lam", "sigma"),
-                     "bfbs": ("bfbs_left", "bfbs_right"), "logistic": (), "affine": ()}
+# The setting of each core kernel parameter whose key is not the parameter's own name
+# (the sockets' names are kept by saved files); KERNEL_PARAMETERS: kernel -> its settings,
+# in the order of the core's parameters (settings.core_arguments passes them on).
+KERNEL_SETTING_KEYS = {"i_left": "bfbs_left", "i_right": "bfbs_right"}
+KERNEL_PARAMETERS = {name: tuple(KERNEL_SETTING_KEYS.get(p, p) for p in entry.parameters)
+                     for name, entry in _CORE_KERNELS.items()}
 SHAPE_SETTINGS = tuple(s for s in SETTINGS if s.shape)
 # The settings each result records as built (SNAP_SETTINGS, in this order); the node
 # group shows a result only while they equal the current ones, "resolution" standing

@@ -109,16 +109,10 @@ def core_arguments(settings: dict) -> CoreArguments:
     """The one mapping from (validated, full) add-on settings to gerbs_core arguments."""
     from .core import module
 
-    kernels_mod = module("kernels")
-    BFBS, ERBS, Affine, LogisticStep = (kernels_mod.BFBS, kernels_mod.ERBS, kernels_mod.Affine,
-                                        kernels_mod.LogisticStep)
-    kernels = {
-        "erbs": lambda s: ERBS(alpha=s["alpha"], beta=s["beta"], gamma=s["gamma"],
-                               lam=s["lam"], sigma=s["sigma"]),
-        "bfbs": lambda s: BFBS(s["bfbs_left"], s["bfbs_right"]),
-        "logistic": lambda s: LogisticStep(),
-        "affine": lambda s: Affine(),
-    }
+    kernels = module("kernels")
+    name = settings["kernel"]
+    keys = zip(kernels.KERNELS[name].parameters, ids.KERNEL_PARAMETERS[name])
+    kernel = kernels.make_kernel(name, **{p: settings[key] for p, key in keys})
     surface = {"boundary": settings["boundary"], "memory_budget": settings["memory_budget"],
                "merge_distance": settings["merge_distance"] if settings["merge"] else None}
-    return CoreArguments(kernels[settings["kernel"]](settings), surface, settings["resolution"])
+    return CoreArguments(kernel, surface, settings["resolution"])

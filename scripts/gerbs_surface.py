@@ -21,7 +21,8 @@ Safety: paths are checked before anything is read (the output may not be the
 input, a directory, or below a file; a glTF input may only reference files in
 its own folder), the result is exported into a temporary folder beside the
 output and renamed into place (a .gltf and its .bin side by side), and no
-output file may replace a file the input uses. Every problem the user can cause
+output file may replace a file the input uses; the output's folder must exist (only
+the default ``out/`` is made). Every problem the user can cause
 ends in one ``error: ...`` line on stderr and exit status 2 with nothing written
 (the input is never written).
 """
@@ -53,23 +54,42 @@ class _Parser(argparse.ArgumentParser):
         raise UserError(message)
 
 
+def kernel_options() -> dict:
+    """{setting key: (kernel label, its SocketSpec)} of every kernel parameter, from the
+    core's one table of kernels (through the add-on's settings): the ``--alpha`` ...
+    ``--bfbs-right`` options."""
+    from blender_addon import ids
+
+    specs = {s.key: s for s in ids.SETTINGS}
+    return {key: (ids.KERNELS[name], specs[key])
+            for name, keys in ids.KERNEL_PARAMETERS.items() for key in keys}
+
+
 def parse_args(argv):
+    from blender_addon import ids
+    from gerbs_core.kernels import KERNELS
+
     p = _Parser(description="GERBS blending surface of a mesh file (headless Blender)")
     p.add_argument("input", nargs="?", type=Path, default=SAMPLE,
                    help=f"mesh file {INPUTS} (default: the bundled {SAMPLE.relative_to(ROOT)})")
     p.add_argument("-o", "--output", type=Path, default=None,
-                   help=f"output {OUTPUTS} (default: out/<input name>_gerbs.glb under the "
-                        "current directory)")
+                   help=f"output {OUTPUTS}, in an existing folder (default: "
+                        "out/<input name>_gerbs.glb under the current directory, out/ made "
+                        "if need be)")
     p.add_argument("--resolution", type=int, default=4,
                    help="segments per mesh edge, 1..64 (default 4)")
-    p.add_argument("--kernel", default="erbs", choices=["erbs", "bfbs", "logistic", "affine"])
-    p.add_argument("--boundary", default="keep", choices=["keep", "straighten"])
-    for name in ("alpha", "beta", "gamma", "lam", "sigma"):
-        p.add_argument(f"--{name}", type=float, default=None, help=f"ERBS parameter {name}")
-    p.add_argument("--bfbs-left", type=int, default=None, help="BFBS exponent i_left (default 2)")
-    p.add_argument("--bfbs-right", type=int, default=None, help="BFBS exponent i_right (default 2)")
+    p.add_argument("--kernel", default="erbs", choices=list(KERNELS),
+                   help="how each vertex's patch blends into its neighbours (default erbs)")
+    p.add_argument("--boundary", default="keep", choices=list(ids.BOUNDARIES))
+    for key, (label, spec) in kernel_options().items():
+        integer = spec.socket_type == "NodeSocketInt"
+        p.add_argument(f"--{key.replace('_', '-')}", type=int if integer else float,
+                       default=None, help=f"{label} parameter {spec.name!r}, {spec.min:g}.."
+                                          f"{spec.max:g} (default {spec.default:g})")
     p.add_argument("--memory-budget", type=float, default=None, metavar="MB",
-                   help="largest memory a build may use, in MB (default 2000)")
+                   help="largest memory the output (stencil or tessellation) may use, in "
+                        "MB; the construction before it may use the larger of this and "
+                        "2000 MB (default 2000)")
     p.add_argument("--merge-distance", type=float, default=None, metavar="D",
                    help="weld vertices closer than D (0: only coincident ones) before "
                         "building, e.g. seams split by an exporter; off by default")
@@ -81,7 +101,8 @@ def parse_args(argv):
                         "groups, glTF split normals)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
-    if args.output is None:
+    args.default_output = args.output is None  # only the default's folder is made
+    if args.default_output:
         args.output = Path("out") / f"{args.input.stem}_gerbs.glb"
     if args.merge_distance is not None and not args.merge_distance >= 0:  # (also NaN)
         raise UserError(f"--merge-distance must be >= 0, got {args.merge_distance}")
@@ -95,7 +116,7 @@ def settings_from(args) -> dict:
     from blender_addon import settings as settings_mod
 
     values = dict(resolution=args.resolution, kernel=args.kernel, boundary=args.boundary)
-    for name in ("alpha", "beta", "gamma", "lam", "sigma", "bfbs_left", "bfbs_right"):
+    for name in kernel_options():
         if getattr(args, name) is not None:
             values[name] = getattr(args, name)
     if args.merge_distance is not None:  # the core's merge by distance (settings "merge")
@@ -148,6 +169,9 @@ def check_paths(args) -> tuple[Path, Path]:
         ancestor = ancestor.parent
     if not ancestor.is_dir():
         raise UserError(f"cannot write {args.output}: {ancestor} is not a directory")
+    if ancestor != out.parent and not args.default_output:  # a typo is not a request to mkdir
+        raise UserError(f"cannot write {args.output}: its folder {args.output.parent} does "
+                        f"not exist; create it first")
     return src, out
 
 
@@ -274,15 +298,17 @@ def mark_creases(bpy, obj, angle=None, sharp=False) -> int:
 
 # --- export ---------------------------------------------------------------------
 
-def export_mesh(bpy, objects, out: Path, protected) -> None:
+def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -> None:
     """Export into a temporary folder beside `out`, then rename every file into
-    place (sidecars first); refuse if one would replace a `protected` file."""
+    place (sidecars first); refuse if one would replace a `protected` file. The folder
+    of `out` must exist unless `make_folder` (the default output's ``out/``)."""
     bpy.ops.object.select_all(action="DESELECT")
     for obj in objects:
         obj.select_set(True)
     bpy.context.view_layer.objects.active = objects[0]
     try:
-        out.parent.mkdir(parents=True, exist_ok=True)
+        if make_folder:
+            out.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=".gerbs-", dir=out.parent))
     except OSError as exc:
         raise UserError(f"cannot write {out}: {exc.strerror}") from None
@@ -346,7 +372,7 @@ def run(args, src: Path, out: Path, protected) -> None:
                       f"{info['triangles']} triangles in {info['build_seconds']:.2f} s",
                       file=sys.stderr)
         bpy.context.view_layer.update()
-        export_mesh(bpy, objects, out, protected)
+        export_mesh(bpy, objects, out, protected, make_folder=args.default_output)
     finally:
         blender_addon.unregister()
 

@@ -200,3 +200,50 @@ def test_a_gerbs_modifier_copied_in_the_stack_does_not_block_applying_the_first(
     assert len(obj.modifiers) == 2
     api.apply(obj)
     assert list(obj.modifiers) == [extra] and np.array_equal(positions(obj.data), P)
+
+
+def test_the_kernel_menu_and_its_parameters_are_the_cores_one_table(blender):
+    """The Kernel menu (values, labels, order), the parameters each kernel shows and the
+    kernel a build gets all come from gerbs_core.kernels.KERNELS."""
+    from blender_addon import ids, settings
+    from gerbs_core.kernels import KERNELS, make_kernel
+
+    assert ids.KERNELS == {name: e.label for name, e in KERNELS.items()}
+    specs = {s.key: s for s in ids.SETTINGS}
+    assert specs["kernel"].items is ids.KERNELS
+    values = {"alpha": 2.0, "beta": 0.5, "gamma": 3.0, "lam": 0.25, "sigma": 2.0,
+              "bfbs_left": 3, "bfbs_right": 1}
+    for name, entry in KERNELS.items():
+        keys = ids.KERNEL_PARAMETERS[name]
+        assert keys == tuple(ids.KERNEL_SETTING_KEYS.get(p, p) for p in entry.parameters)
+        assert all(k in specs for k in keys)
+        full = settings.validate({**ids.DEFAULTS, **values, "kernel": name})
+        got = settings.core_arguments(full).kernel
+        assert got == make_kernel(name, **dict(zip(entry.parameters, (values[k] for k in keys))))
+
+
+def _kernel_name_literals(path):
+    """(line, names) of every list / tuple / set / dict literal in `path` holding two or
+    more kernel names as strings (docstrings and comments are not literals)."""
+    import ast
+
+    from gerbs_core.kernels import KERNELS
+
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        items = node.keys if isinstance(node, ast.Dict) else \
+            node.elts if isinstance(node, (ast.List, ast.Tuple, ast.Set)) else []
+        names = [n.value for n in items if isinstance(n, ast.Constant) and n.value in KERNELS]
+        if len(names) >= 2:
+            found.append((node.lineno, names))
+    return found
+
+
+def test_no_second_list_of_kernel_names_in_the_add_on_or_the_cli():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    paths = sorted((root / "blender_addon").glob("*.py")) + [root / "scripts" / "gerbs_surface.py"]
+    assert len(paths) > 20
+    found = {p.name: hits for p in paths if (hits := _kernel_name_literals(p))}
+    assert found == {}

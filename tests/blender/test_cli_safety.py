@@ -50,6 +50,7 @@ def _import_vertices(path: Path) -> int:
 
 @pytest.mark.parametrize("name", ["rel.gltf", "sub/dir/rel.gltf", "./up/../rel2.gltf"])
 def test_gltf_with_relative_or_bare_name_lands_beside_its_buffer(blender, tmp_path, name):
+    os.makedirs(os.path.normpath(tmp_path / name).rsplit(os.sep, 1)[0], exist_ok=True)
     out = cli(SUZANNE, "-o", name, "--resolution", "2", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     gltf = (tmp_path / name).resolve()
@@ -218,14 +219,16 @@ NO_FACES = "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n"  # edges only: no surface
     ("--memory-budget 0", ["--memory-budget"]), ("--merge-distance -1", ["--merge-distance"]),
     ("--kernel gauss", ["--kernel"]), ("no faces", ["empty"]),
     ("too large", ["memory"]),
+    ("missing folder", ["its folder", "does not exist", "create it first"]),
 ])
 def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, case, words):
     good = tmp_path / "good.obj"
     good.write_bytes(SUZANNE.read_bytes())
     target = tmp_path / "out" / "o.glb"
+    target.parent.mkdir()  # an -o folder must exist ("missing folder")
     args = [good, "-o", target]
     if case == "output is a directory":
-        target.mkdir(parents=True)
+        target.mkdir()
     elif case == "parent is a file":
         (tmp_path / "file.txt").write_text("x")
         args = [good, "-o", tmp_path / "file.txt" / "o.glb"]
@@ -249,8 +252,13 @@ def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, 
         good.write_text(NO_FACES)
     elif case == "too large":
         args += ["--resolution", "64", "--memory-budget", "1"]
+    elif case == "missing folder":
+        args[2] = Path("no") / "such" / "o.obj"  # as typed: relative to the working folder
+        words = [*words, str(args[2].parent)]
+    before = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*"))
     out = cli(*args, cwd=tmp_path)
     assert_user_error(out, *words)
     assert not target.is_file() and not leftovers(tmp_path)
+    assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == before  # no mkdir
     if case == "output is a directory":
         assert list(target.iterdir()) == []

@@ -144,3 +144,44 @@ def test_a_huge_ngon_is_refused_before_its_build_not_run_out_of_memory(blender):
     assert np.array_equal(positions(obj.data), X)
     o2, c2 = topology(obj.data)
     assert np.array_equal(o2, offsets) and np.array_equal(c2, corners)
+
+
+def _core_error(build):
+    from gerbs_core.errors import InvalidMeshError
+
+    with pytest.raises(InvalidMeshError) as info:
+        build()
+    return info.value
+
+
+@pytest.mark.parametrize("case", ["no faces", "no vertices", "nan", "repeated", "unused",
+                                  "non_manifold"])
+def test_invalid_mesh_message_says_problem_and_indices_once(case):
+    """format_error names the problem tag once and the indices once: a Circle (vertices,
+    no faces) reads "invalid mesh (empty): the mesh has no faces", not "... (empty) at the
+    mesh: empty: the mesh has no faces"."""
+    from blender_addon.errors import format_error
+    from gerbs_core.mesh import BlendingSurface, MeshTopology
+
+    V = np.array([(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (3, 3, 3)], float)
+    build = {
+        "no faces": lambda: BlendingSurface(V, np.zeros((0, 3), int)),
+        "no vertices": lambda: MeshTopology([(0, 1, 2)], n_vertices=0),
+        "nan": lambda: BlendingSurface(np.where(np.arange(6)[:, None] == 4, np.nan, V),
+                                       [(0, 1, 2), (1, 0, 3), (0, 2, 4), (0, 4, 3)]),
+        "repeated": lambda: MeshTopology([(0, 1, 2), (0, 1, 3, 1)]),
+        "unused": lambda: MeshTopology([(0, 1, 2)], n_vertices=4),
+        "non_manifold": lambda: MeshTopology([(0, 1, 2), (1, 0, 3), (0, 1, 4)]),
+    }[case]
+    exc = _core_error(build)
+    message = format_error(exc)
+    assert message.startswith(f"GERBS: invalid mesh ({exc.problem}): "), message
+    assert message.count(exc.problem) == 1, message
+    assert "at the mesh" not in message
+    if exc.indices:
+        shown = f"[{', '.join(map(str, exc.indices))}]"
+        assert message.count(shown) == 1 and message.endswith(shown), message
+    else:
+        assert "[" not in message, message
+    if case == "no faces":
+        assert message == "GERBS: invalid mesh (empty): the mesh has no faces"

@@ -34,6 +34,26 @@ def test_the_panel_shows_only_the_chosen_kernels_parameters(blender):
         assert items[spec.name].description == spec.description and len(spec.description) > 30
 
 
+def test_the_memory_budget_tooltip_says_what_the_budget_bounds(blender):
+    """As the README says: the budget bounds the output; the construction may use the
+    larger of it and gerbs_core's BUILD_MIN_BUDGET (2000 MB). The socket and the property
+    keep their name and identifier (only the tooltip changed)."""
+    from blender_addon import api, ids
+    from gerbs_core.mesh.memory import BUILD_MIN_BUDGET
+
+    (spec,) = [s for s in ids.SETTINGS if s.key == "memory_budget"]
+    assert (spec.name, spec.default, spec.scale) == ("Memory Budget (MB)", 2000.0, 1.0e6)
+    text = spec.description
+    assert "a build may use" not in text
+    assert "output" in text and f"larger of this and {BUILD_MIN_BUDGET / 1e6:.0f} MB" in text
+    bpy.ops.mesh.primitive_cube_add()
+    mod = api.add_surface(bpy.context.active_object, resolution=2)
+    (item,) = [i for i in mod.node_group.interface.items_tree if i.name == spec.name]
+    assert item.description == text
+    prop = bpy.ops.object.gerbs_add_surface.get_rna_type().properties["memory_budget"]
+    assert prop.description == text  # the Add operator's redo panel shows the same tooltip
+
+
 def _nan_vertex(obj, index):
     co = obj.data.vertices[index].co
     co.x = float("nan")

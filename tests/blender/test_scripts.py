@@ -34,7 +34,7 @@ def test_progress_callback_reports_monotone_stages(blender):
 def test_main_job_on_the_bundled_sample(tmp_path):
     out = run([ROOT / "scripts" / "gerbs_surface.py"], cwd=tmp_path)  # no arguments at all
     assert out.returncode == 0, out.stderr
-    result = tmp_path / "out" / "suzanne_gerbs.glb"
+    result = tmp_path / "out" / "suzanne_gerbs.glb"  # the default's out/ is made
     assert result.is_file() and "100.0%" in out.stderr  # the text progress bar ran
     assert "wrote" in out.stderr
 
@@ -74,6 +74,8 @@ def test_main_job_messy_mesh_prints_warnings_and_exits_zero(tmp_path):
     assert out.returncode == 0, out.stderr
     lines = [x for x in out.stderr.splitlines() if x.startswith("warning:")]
     assert len(lines) == 2, out.stderr
+    for word in ("warning", "non_manifold", "GERBS"):  # stdout holds Blender's own lines only
+        assert word not in out.stdout, out.stdout
     assert "non_manifold_edge" in lines[0] and "edges (0, 1)" in lines[0]
     assert "non_manifold_vertex" in lines[1] and "vertex indices [0, 1]" in lines[1]
     assert (tmp_path / "o.obj").is_file()

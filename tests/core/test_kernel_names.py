@@ -73,3 +73,34 @@ def test_a_kernel_list_takes_names_and_names_a_bad_entry():
     with pytest.raises(InvalidParameterError, match=f"kernel: entry 1 must be .*{ACCEPTED}, "
                        "got 'bogus'"):
         GERBSBasis([0.0, 1.0, 2.5, 3.0], ["erbs", "bogus", "affine"])
+
+
+def test_one_table_names_labels_and_parameters_of_every_kernel():
+    """KERNELS is the one table: KERNEL_NAMES is its view, each entry's parameters are
+    keywords of its constructor, and make_kernel builds the kernel from them."""
+    from gerbs_core.kernels import KERNELS, make_kernel
+
+    assert list(KERNELS) == list(KERNEL_NAMES) == ["erbs", "bfbs", "logistic", "affine"]
+    assert [e.label for e in KERNELS.values()] == ["ERBS", "BFBS", "Logistic", "Affine"]
+    assert all(KERNEL_NAMES[n] is e.kernel for n, e in KERNELS.items())
+    assert make_kernel("erbs", alpha=2.0, beta=0.5, gamma=3.0, lam=0.25, sigma=2.0) == \
+        ERBS(alpha=2.0, beta=0.5, gamma=3.0, lam=0.25, sigma=2.0)
+    assert make_kernel("bfbs", i_left=3, i_right=1) == BFBS(3, 1)
+    assert make_kernel("bfbs", i_right=4) == BFBS(2, 4)
+    for name, obj in OBJECTS.items():
+        assert make_kernel(name) == obj
+
+
+@pytest.mark.parametrize("name,params,bad", [
+    ("gauss", {}, "kernel"), (None, {}, "kernel"), ("ERBS", {}, "kernel"),
+    ("logistic", {"alpha": 1.0}, "alpha"), ("erbs", {"i_left": 2}, "i_left"),
+    ("erbs", {"alpha": -1.0}, "alpha"), ("bfbs", {"i_left": -1}, "i_left"),
+])
+def test_make_kernel_refuses_a_bad_name_or_parameter_naming_it(name, params, bad):
+    from gerbs_core.kernels import make_kernel
+
+    with pytest.raises(InvalidParameterError) as info:
+        make_kernel(name, **params)
+    assert info.value.name == bad
+    if bad == "kernel":
+        assert ACCEPTED in str(info.value)
