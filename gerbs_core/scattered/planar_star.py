@@ -177,27 +177,27 @@ class PlanarStarCover:
         :func:`~gerbs_core.gauge.blend.blend_check` certifies
         kappa rho <= rho~/shrink <= rho on it (rigorous bound, not sampling).
         """
-        from ..gauge.blend import adaptive_scales, fit_blend_widths
+        from ..gauge.blend import fit_blend_widths, scales_from_corners
         E = len(self.delta)
         e = np.flatnonzero(self.next_edge >= 0)
-        f = self.next_edge[e]
-        nA, nB = self.nu[e] - self.delta[e], self.nu[f]
-        roomA = self.delta[e] * np.where(self.prev_edge[e] >= 0, 0.5, 1.0)
-        roomB = self.delta[f] * np.where(self.next_edge[f] >= 0, 0.5, 1.0)
-        self.c = adaptive_scales(E, e, f, nA, self.p[e], nB, self.p[f], roomA, roomB,
-                                 self.kappa, self.kernel)
-        wa, wb, ok = np.empty(len(e)), np.empty(len(e)), np.empty(len(e), bool)
-        for s in range(0, len(e), _FIT_CHUNK):      # per corner: chunks only keep it in cache
-            k, ek, fk = slice(s, s + _FIT_CHUNK), e[s:s + _FIT_CHUNK], f[s:s + _FIT_CHUNK]
-            wa[k], wb[k], ok[k], _, _ = fit_blend_widths(
-                nA[k], self.p[ek], self.c[ek], nB[k], self.p[fk], self.c[fk], roomA[k], roomB[k],
-                self.kappa, self.kernel)
-        if not ok.all():
+        # the corners' arrays chunk by chunk, twice (scales, then widths), never all at
+        # once: ~10 (E,) arrays less of fresh memory (their page faults cost more than
+        # the repeated gathers); the same operations per corner, so the same bits
+        chunks = [slice(s, s + _FIT_CHUNK) for s in range(0, len(e), _FIT_CHUNK)]
+        self.c = scales_from_corners(E, (self._corners(e[k]) for k in chunks), self.kappa,
+                                     self.kernel)
+        self.R, self.L = np.zeros(E), np.zeros(E)
+        bad = []
+        for k in chunks:                  # per corner: chunks only keep it in cache
+            ek, fk, nA, pA, nB, pB, roomA, roomB = self._corners(e[k])
+            self.R[ek], self.L[fk], ok, _, _ = fit_blend_widths(
+                nA, pA, self.c[ek], nB, pB, self.c[fk], roomA, roomB, self.kappa, self.kernel)
+            bad.append(ek[~ok])
+        bad = np.concatenate(bad) if bad else e[:0]
+        if bad.size:
             raise InvalidPointSetError(
                 "no certified smooth gauge at a corner of these stars (degenerate polygon); "
-                "offending points", np.unique(self.edge_star[e[~ok]]))
-        self.R, self.L = np.zeros(E), np.zeros(E)
-        self.R[e], self.L[f] = wa, wb
+                "offending points", np.unique(self.edge_star[bad]))
         # the amplitude 1 / (shrink c p) of each edge's pulled-in line, once per edge
         self._line_scale = 1.0 / (self.shrink * self.c * self.p)
         self._sides = self._side_tables() if E <= _TABLE_EDGES and not self.exact else None
@@ -210,6 +210,17 @@ class PlanarStarCover:
         rmin = self.p / np.cos(phi)
         self.min_radius = np.full(len(self.centers), np.inf)
         np.minimum.at(self.min_radius, self.edge_star, self.shrink * self.kappa * rmin)
+
+    def _corners(self, e):
+        """The corners at the ends of edges e (m,) (each into its next edge f):
+        (e, f, nA, pA, nB, pB, roomA, roomB) of :func:`~gerbs_core.gauge.blend.adaptive_scales`,
+        the rooms half of each edge (the whole edge at an open star's end)."""
+        f = self.next_edge[e]
+        de, df = self.delta[e], self.delta[f]
+        nA, nB = self.nu[e] - de, self.nu[f]
+        roomA = de * np.where(self.prev_edge[e] >= 0, 0.5, 1.0)
+        roomB = df * np.where(self.next_edge[f] >= 0, 0.5, 1.0)
+        return e, f, nA, self.p[e], nB, self.p[f], roomA, roomB
 
     def _side_tables(self):
         """The envelope's pieces on each edge e as two rows of flat tables, so that
