@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["CONVEX_SCALE", "CREASE_SCALE", "adaptive_scales", "blend_check", "closed_form_fit",
-           "fit_blend_widths", "overshoot_profile"]
+           "fit_blend_widths", "overshoot_profile", "scales_from_corners"]
 
 _BLEND_SAMPLES = 24       # sub-intervals per side in blend_check
 _BLEND_SHRINK = 0.85      # factor applied to a failing side's width
@@ -45,16 +45,23 @@ def adaptive_scales(n_edges, ea, eb, nA, pA, nB, pB, roomA, roomB, kappa, kernel
     wishes: halfway. Only the quality depends on this choice; the widths are
     then certified for it (:func:`fit_blend_widths`).
     """
+    chunks = ((ea[k], eb[k], nA[k], pA[k], nB[k], pB[k], roomA[k], roomB[k])
+              for k in (slice(s, s + _SCALE_CHUNK) for s in range(0, len(nA), _SCALE_CHUNK)))
+    return scales_from_corners(n_edges, chunks, kappa, kernel)
+
+
+def scales_from_corners(n_edges, chunks, kappa, kernel):
+    """:func:`adaptive_scales` from the corners in chunks: an iterable of tuples
+    (ea, eb, nA, pA, nB, pB, roomA, roomB), each array (m,) (the caller then need not
+    hold all corners' arrays at once). The same c to the bit for any chunking."""
     G, GB = overshoot_profile(kernel), overshoot_profile(kernel, mirrored=True)
     hi = np.ones(n_edges)
     lo = np.full(n_edges, kappa)
     # corners in chunks: the ~30 temporaries of a chunk stay in cache (2x at 6e5 corners);
     # min / max are exact, so the per-edge results do not depend on the chunking
-    for s in range(0, len(nA), _SCALE_CHUNK):
-        k = slice(s, s + _SCALE_CHUNK)
-        cvx, up, rfx, dn = _corner_wishes(nA[k], pA[k], nB[k], pB[k], roomA[k], roomB[k],
-                                          kappa, G, GB)
-        for e in (ea[k], eb[k]):
+    for ea, eb, nA, pA, nB, pB, roomA, roomB in chunks:
+        cvx, up, rfx, dn = _corner_wishes(nA, pA, nB, pB, roomA, roomB, kappa, G, GB)
+        for e in (ea, eb):
             np.minimum.at(hi, e[cvx], up[cvx])
             np.maximum.at(lo, e[rfx], dn[rfx])
     return np.where(lo <= hi, hi, 0.5 * (lo + hi))

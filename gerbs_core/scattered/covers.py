@@ -122,12 +122,19 @@ def _set_transforms(tri, points):
 
 
 def _corner_in(s, tri_idx, vertex):
-    """Edge index 3 t + k of the corner of triangle ``tri_idx`` at ``vertex`` (-1 if none)."""
-    ok = tri_idx >= 0
-    t = np.where(ok, tri_idx, 0)
-    st = s[t]                     # the corner holding vertex (0 if none, as argmax)
-    k = np.where(st[:, 1] == vertex, 1, 0) + np.where(st[:, 2] == vertex, 2, 0)
-    return np.where(ok, 3 * t + k, -1)
+    """Edge index 3 t + k of the corner of triangle ``tri_idx`` at ``vertex`` (-1 if none).
+
+    From two gathers of the flat simplices (not an (E, 3) one) and in place: the same
+    integers (k = 0 if ``vertex`` is neither of the other corners, as argmax)."""
+    sf = s.reshape(-1)
+    t3 = np.maximum(tri_idx, 0)
+    t3 *= 3
+    k = np.equal(sf.take(t3 + 1), vertex)
+    out = t3 + k
+    np.equal(sf.take(t3 + 2), vertex, out=k)
+    out += 2 * k
+    out[tri_idx < 0] = -1
+    return out
 
 
 def delaunay_cover(points, kernel, **gauge_kw):
@@ -141,7 +148,10 @@ def delaunay_cover(points, kernel, **gauge_kw):
     # the edge (a, i1), i.e. opposite vertex i0 = s[t, k+1]; prev: opposite i1
     nxt = _corner_in(s, nb[:, [1, 2, 0]].reshape(-1), star)
     prv = _corner_in(s, nb[:, [2, 0, 1]].reshape(-1), star)
-    cover = PlanarStarCover(points, star, points[i0], points[i1], nxt, prv, kernel, **gauge_kw)
+    # the edges' end points gathered coordinate-major: (E, 2) views with contiguous columns
+    pts_t = np.ascontiguousarray(points.T)
+    q0, q1 = pts_t.take(i0, axis=1).T, pts_t.take(i1, axis=1).T
+    cover = PlanarStarCover(points, star, q0, q1, nxt, prv, kernel, **gauge_kw)
     return cover, tri, s
 
 
