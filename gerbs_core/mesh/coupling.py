@@ -325,7 +325,7 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     for d in np.unique(degrees).tolist():
         vs = np.flatnonzero(degrees == d)
         M = n_monomials(d)
-        Pinv[vs, :M, :M] = pinned_normal_inverse(N[vs, :M, :M], d)
+        Pinv[vs, :M, :M] = pinned_normal_inverse(N[vs, :M, :M], d, certified=True)
     Pinv = Pinv / h[:, None, None] ** deg[None, :, None]      # unscale: c = scaled / h^|m|
     # the one-entry-per-row matrices share their arrays (the pointers 0..SC, the column
     # indices of the diagonals, the ones): the model keeps them for partial updates
