@@ -289,8 +289,10 @@ def _choose(cands, X, smp, rule, V, penalty, coefs=None):
     choice = np.zeros(V, dtype=np.int64)
     energy = np.empty(tension.shape)
     E = np.empty((V, len(cands)))
+    flat = vals.reshape(-1, 3)               # row s, candidate i at s * ncand + i
+    base = np.arange(len(P)) * len(cands)
     for _ in range(rule.choice_rounds):
-        cur = P[:, None] * vals[np.arange(len(P)), choice[smp.vertex]]
+        cur = P[:, None] * flat[base + choice[smp.vertex]]
         S = np.stack([np.bincount(smp.sample, cur[:, k], minlength=smp.n_samples)
                       for k in range(3)], 1)
         others = S[smp.sample] - cur                           # sum of the other slots
