@@ -319,7 +319,11 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     del bu, active
     # per vertex normal matrices of data + agreement + tension (block diagonal B^T W B)
     N = normals.copy()
-    G2 = (BsT @ sp.diags(wa + wt) @ BsT.T).tocoo()
+    # (the rows' weights scale BsT's columns in place of a product with a diagonal matrix)
+    BsTw = sp.csc_matrix((BsT.data * np.repeat(wa + wt, np.diff(BsT.indptr)), BsT.indices,
+                          BsT.indptr), shape=BsT.shape)
+    G2 = (BsTw @ BsT.T).tocoo()
+    del BsTw
     N[G2.row // mmax, G2.row % mmax, G2.col % mmax] += G2.data
     Pinv = np.zeros_like(N)
     for d in np.unique(degrees).tolist():
