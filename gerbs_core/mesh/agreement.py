@@ -49,7 +49,7 @@ from ..gauge.jet import partition_jet
 from .cover import require_cover
 from .coupling import coupled_fits, identity_fits
 from .fits import CANDIDATES, candidate_fits_all, chosen_rows
-from .monomials import monomial_exponents, monomials, n_monomials
+from .monomials import monomial_exponents, monomial_gradients, monomials, n_monomials
 from .row_values import (candidate_coefs, candidate_values, chunks, copy_aliases, own_rows,
                          per_degree, row_sums, square_norms)
 from .spread_fits import SPREAD, gate, spread_candidates
@@ -234,8 +234,8 @@ def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
     dmax = max(c.degree for c in cands)
     for sl in chunks(len(smp.vertex)):
         nf, vert = fn[smp.face[sl]], smp.vertex[sl]
-        dm = monomials(smp.y[sl], dmax, 1)[1]                       # (SC, M, 2)
-        dm = np.concatenate([dm[..., 0], dm[..., 1]])               # (2 SC, M): d/dy1, d/dy2
+        dm = monomial_gradients(smp.y[sl], dmax)                    # (2, SC, M)
+        dm = dm.reshape(-1, dm.shape[-1])                           # (2 SC, M): d/dy1, d/dy2
         for i, own, d in per_degree(cands, coefs, dm, np.concatenate([vert, vert])):
             k = len(d) // 2                                          # own: both halves' rows
             n = np.cross(d[:k], d[k:])

@@ -7,7 +7,8 @@ from gerbs_core.mesh.charts import vertex_charts
 from gerbs_core.mesh.fits import (CANDIDATES, candidate_fits, candidate_fits_all,
                                   pinned_normal_inverse)
 from gerbs_core.mesh.layout import face_layouts
-from gerbs_core.mesh.monomials import bending_gram, monomial_exponents, monomials, n_monomials
+from gerbs_core.mesh.monomials import (bending_gram, monomial_exponents, monomial_gradients,
+                                       monomials, n_monomials)
 from gerbs_core.mesh.rings import data_rings
 from gerbs_core.mesh.topology import MeshTopology
 
@@ -178,3 +179,15 @@ def test_certified_inverse_is_the_pinned_inverse_to_rounding(degree):
     out = pinned_normal_inverse(bad, degree, certified=True)
     assert np.array_equal(out[5], pinned_normal_inverse(bad[5:6], degree)[0])
     assert np.abs(out[:5] - ref[:5]).max() <= 1e-12 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3, 4])
+def test_monomial_gradients_are_the_monomials_derivatives_bit_for_bit(degree):
+    y = np.random.default_rng(degree).normal(size=(300, 2))
+    y[:3] = [[0.0, 0.0], [-0.0, 1.5], [2.0, -0.0]]          # zeros, signed zeros
+    d = monomials(y, degree, 1)[1]
+    g = monomial_gradients(y, degree)
+    assert g.shape == (2, 300, n_monomials(degree))
+    for j in (0, 1):
+        assert np.array_equal(g[j], d[..., j])
+        assert np.array_equal(np.signbit(g[j]), np.signbit(d[..., j]))
