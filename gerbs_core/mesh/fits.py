@@ -154,11 +154,18 @@ class CandidateFits:
         self.alias = alias
 
 
-def _data_weights(y, use):
+def _data_weights(y, use, inverse_square=None):
     """1 / |y|^2 for scaled chart positions y (h = 1) of the data used, 0 elsewhere: near
-    data count more (the fit is used near its vertex)."""
+    data count more (the fit is used near its vertex). ``inverse_square``: the weights of
+    all data (:func:`_inverse_squares` of y), when several rules weigh the same y."""
+    q = _inverse_squares(y) if inverse_square is None else inverse_square
+    return np.where(use, q, 0.0)
+
+
+def _inverse_squares(y):
+    """1 / |y|^2 (0 at y = 0) of scaled chart positions y (..., 2)."""
     d = np.hypot(y[..., 0], y[..., 1])
-    return np.where(use & (d > 0), 1.0 / np.where(d > 0, d, 1.0) ** 2, 0.0)
+    return np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0) ** 2, 0.0)
 
 
 def _normal(B, w):
@@ -234,6 +241,7 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
     y = rings.y[idx] / rings.h[vs][:, None, None]
     h = rings.h[vs]
     Ball = monomials(y, dmax)[0]                          # (K, n, M_max)
+    iq = _inverse_squares(y)                              # every rule's data weights
     q = rings.ids[idx]
     done = {}                                             # (d, 2) -> its normal matrices
     # the wider rules first, so that a ring-1 rule's fallback can take theirs
@@ -245,7 +253,7 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
         if layers < 2:
             # the condition only where ring 1 holds enough data (else ring 2 is taken anyway)
             s = np.flatnonzero(n1[vs] >= M + 2)
-            N1 = _normal(B[s], _data_weights(y[s], real[s] & (ring[s] <= 1)))
+            N1 = _normal(B[s], _data_weights(y[s], real[s] & (ring[s] <= 1), iq[s]))
             lam = shared_rows(N1, np.linalg.eigvalsh)
             cond = lam[:, -1] / np.maximum(lam[:, 0], 1e-300)
             use_layers[:] = 2
@@ -258,24 +266,25 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
             own = np.flatnonzero(use_layers < 2)
             if len(own):
                 use, N, A, bw = _fit(y[own], B[own], real[own] & (ring[own] <= layers),
-                                     h[own], degree)
+                                     h[own], degree, iq[own])
                 a["normal"][vs[own]] = N
                 a["blocks"].append(_compact(vs[own], use, q[own], A, bw))
             continue
         use_layers = np.where((use_layers == 2) & (n2[vs] < M + 2), wider, use_layers)
-        use, N, A, bw = _fit(y, B, real & (ring <= use_layers[:, None]), h, degree)
+        use, N, A, bw = _fit(y, B, real & (ring <= use_layers[:, None]), h, degree, iq)
         a["normal"][vs] = N
         a["blocks"].append(_compact(vs, use, q, A, bw))   # A, bw: zero off the used data
         if layers == 2:
             done[(degree, layers)] = N
 
 
-def _fit(y, B, use, h, degree):
+def _fit(y, B, use, h, degree, inverse_square=None):
     """(use, N (K, M, M), A (K, M, n), bw (K, M, n)) of the fits of the data ``use`` (K, n)
     at scaled chart positions y (K, n, 2), designs B (K, n, M), chart scales h (K,):
     normal matrices, the unscaled operators (A, zero off the used data) and the
-    weighted designs (the normal equations' right-hand sides)."""
-    w = _data_weights(y, use)
+    weighted designs (the normal equations' right-hand sides). ``inverse_square``: the
+    chunk's 1 / |y|^2 (:func:`_inverse_squares`, shared by its rules) if made already."""
+    w = _data_weights(y, use, inverse_square)
     w /= np.maximum(w.sum(1, keepdims=True), 1e-300)      # per vertex: weights sum to 1
     bw = np.swapaxes(B * w[..., None], 1, 2)              # (K, M, n)
     N = bw @ B
