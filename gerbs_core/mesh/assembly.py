@@ -166,15 +166,18 @@ def _gather_rows(src, src_ptr, rows, dst_ptr, step):
     cut = np.flatnonzero(np.diff(rows) != step) + 1
     first = np.concatenate([[0], cut])
     length = np.diff(np.concatenate([first, [len(rows)]]))
-    short = np.ones(len(rows), dtype=bool)
-    for a, n in zip(first[length >= LONG_RUN].tolist(), length[length >= LONG_RUN].tolist()):
-        r0 = rows[a]
+    long = length >= LONG_RUN
+    a, n = first[long], length[long]
+    r0 = rows[a]
+    # every long run's slice bounds at once: the loop only copies (one slice per run)
+    bounds = zip(dst_ptr[a].tolist(), dst_ptr[a + n].tolist(), src_ptr[r0].tolist(),
+                 src_ptr[r0 + (n if step else 1)].tolist(), n.tolist())
+    for d0, d1, s0, s1, k in bounds:
         if step:
-            out[dst_ptr[a]:dst_ptr[a + n]] = src[src_ptr[r0]:src_ptr[r0 + n]]
+            out[d0:d1] = src[s0:s1]
         else:
-            row = src[src_ptr[r0]:src_ptr[r0 + 1]]
-            out[dst_ptr[a]:dst_ptr[a + n]].reshape(n, len(row))[:] = row
-        short[a:a + n] = False
+            out[d0:d1].reshape(k, s1 - s0)[:] = src[s0:s1]
+    short = np.repeat(~long, length)
     s = np.flatnonzero(short)
     lens = dst_ptr[s + 1] - dst_ptr[s]
     out[ranges(dst_ptr[s], lens)] = src[ranges(src_ptr[rows[s]], lens)]
