@@ -307,11 +307,14 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     # the rows' monomials, only those of each vertex's own degree (the others have zero
     # coefficients): Bu (SC, V MMAX) csr and the scaled Bs^T (V MMAX, SC) csc, built
     # directly in compressed form (no coo sort: these are the largest matrices)
-    active = np.arange(mmax)[None, :] < n_monomials(np.asarray(degrees))[smp.vertex][:, None]
+    per_row = n_monomials(np.asarray(degrees))[smp.vertex]       # active monomials of a row
+    active = np.arange(mmax)[None, :] < per_row[:, None]
     # (one pattern: int32 index arrays shared by both matrices, not a copy each)
     idx = np.int32 if max(V * mmax, active.size, L) < 2 ** 31 - 1 else np.int64
     cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active].astype(idx)
-    ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))]).astype(idx)
+    ptr = np.zeros(SC + 1, dtype=idx)
+    np.cumsum(per_row, out=ptr[1:])
+    del per_row
     bu = smp.Bu[active]
     Bu = sp.csr_matrix((bu, cols, ptr), shape=(SC, V * mmax))
     # Bs = Bu / h_v^|m| entry by entry (the values of smp.Bs, without its dense array)
