@@ -49,7 +49,7 @@ from ..gauge.jet import partition_jet
 from .cover import require_cover
 from .coupling import coupled_fits, identity_fits
 from .fits import CANDIDATES, candidate_fits_all, chosen_rows
-from .monomials import monomial_exponents, monomials, n_monomials
+from .monomials import monomial_exponents, monomial_gradients, monomials, n_monomials
 from .row_values import (candidate_coefs, candidate_values, chunks, copy_aliases, own_rows,
                          per_degree, row_sums, square_norms)
 from .spread_fits import SPREAD, gate, spread_candidates, spread_faces
@@ -245,8 +245,8 @@ def _fold_penalty(cands, X, smp, fn, h, rule, coefs=None):
     dmax = max(c.degree for c in cands)
     for sl in chunks(len(smp.vertex)):
         nf, vert = fn[smp.face[sl]], smp.vertex[sl]
-        dm = monomials(smp.y[sl], dmax, 1)[1]                       # (SC, M, 2)
-        dm = np.concatenate([dm[..., 0], dm[..., 1]])               # (2 SC, M): d/dy1, d/dy2
+        dm = monomial_gradients(smp.y[sl], dmax)                    # (2, SC, M)
+        dm = dm.reshape(-1, dm.shape[-1])                           # (2 SC, M): d/dy1, d/dy2
         for i, own, d in per_degree(cands, coefs, dm, np.concatenate([vert, vert])):
             k = len(d) // 2                                          # own: both halves' rows
             n = np.cross(d[:k], d[k:])
@@ -300,8 +300,10 @@ def _choose(cands, X, smp, rule, V, penalty, coefs=None):
     choice = np.zeros(V, dtype=np.int64)
     energy = np.empty(tension.shape)
     E = np.empty((V, len(cands)))
+    flat = vals.reshape(-1, 3)               # row s, candidate i at s * ncand + i
+    base = np.arange(len(P)) * len(cands)
     for _ in range(rule.choice_rounds):
-        cur = P[:, None] * vals[np.arange(len(P)), choice[smp.vertex]]
+        cur = P[:, None] * flat[base + choice[smp.vertex]]
         S = np.stack([np.bincount(smp.sample, cur[:, k], minlength=smp.n_samples)
                       for k in range(3)], 1)
         others = S[smp.sample] - cur                           # sum of the other slots

@@ -92,35 +92,41 @@ def _partition(psi, terms, n_samples, n_max):
 def _write_mono(data_e, cols_e, e0, y, w, vertex, Mt):
     """E's entries of the terms (their values Psi mono_m and columns u M + m), term after
     term from e0: strided views of the output when all terms share one degree, else
-    one scatter per degree and monomial. ``cols_e`` None: values only."""
+    per degree one scatter of its terms' (n, M) blocks to their runs of slots.
+    ``cols_e`` None: values only."""
     T = len(w)
-    ptr = np.zeros(T + 1, dtype=np.int64)
-    np.cumsum(Mt, out=ptr[1:])
+    sizes = np.flatnonzero(np.bincount(Mt)).tolist()     # the terms' coefficient counts
+    ptr = None
     y0, y1 = np.ascontiguousarray(y[:, 0]), np.ascontiguousarray(y[:, 1])
-    for M in np.unique(Mt).tolist():
+    for M in sizes:
         d = _degree_of(M)
         E = monomial_exponents(d)
-        sel = None if ptr[-1] == T * M and Mt.min() == M else np.flatnonzero(Mt == M)
-        ww = w if sel is None else w[sel]
-        cv = (vertex if sel is None else vertex[sel]) * MMAX
-        p1 = powers(y0 if sel is None else y0[sel], d)
-        p2 = powers(y1 if sel is None else y1[sel], d)
-        val = np.empty(len(ww))
-        if sel is None:
+        one = len(sizes) == 1
+        sel = None if one else np.flatnonzero(Mt == M)
+        ww = w if one else w[sel]
+        cv = (vertex if one else vertex[sel]) * MMAX
+        p1 = powers(y0 if one else y0[sel], d)
+        p2 = powers(y1 if one else y1[sel], d)
+        if one:
             dv = data_e[e0:e0 + T * M].reshape(T, M)
             dc = None if cols_e is None else cols_e[e0:e0 + T * M].reshape(T, M)
         else:
-            start = e0 + ptr[sel]
+            dv = np.empty((len(sel), M))
+            dc = None if cols_e is None else np.empty((len(sel), M), dtype=cols_e.dtype)
+        val = np.empty(len(ww))
         for m, (a, b) in enumerate(E):
             np.multiply(p1[a], p2[b], out=val)
-            if sel is None:
-                np.multiply(val, ww, out=dv[:, m])
-                if dc is not None:
-                    np.add(cv, m, out=dc[:, m])
-            else:
-                data_e[start + m] = val * ww
-                if cols_e is not None:
-                    cols_e[start + m] = cv + m
+            np.multiply(val, ww, out=dv[:, m])
+            if dc is not None:
+                np.add(cv, m, out=dc[:, m])
+        if not one:
+            if ptr is None:
+                ptr = np.zeros(T + 1, dtype=np.int64)
+                np.cumsum(Mt, out=ptr[1:])
+            slots = (e0 + ptr[sel])[:, None] + np.arange(M)
+            data_e[slots] = dv
+            if dc is not None:
+                cols_e[slots] = dc
 
 
 def _degree_of(M):
@@ -160,15 +166,18 @@ def _gather_rows(src, src_ptr, rows, dst_ptr, step):
     cut = np.flatnonzero(np.diff(rows) != step) + 1
     first = np.concatenate([[0], cut])
     length = np.diff(np.concatenate([first, [len(rows)]]))
-    short = np.ones(len(rows), dtype=bool)
-    for a, n in zip(first[length >= LONG_RUN].tolist(), length[length >= LONG_RUN].tolist()):
-        r0 = rows[a]
+    long = length >= LONG_RUN
+    a, n = first[long], length[long]
+    r0 = rows[a]
+    # every long run's slice bounds at once: the loop only copies (one slice per run)
+    bounds = zip(dst_ptr[a].tolist(), dst_ptr[a + n].tolist(), src_ptr[r0].tolist(),
+                 src_ptr[r0 + (n if step else 1)].tolist(), n.tolist())
+    for d0, d1, s0, s1, k in bounds:
         if step:
-            out[dst_ptr[a]:dst_ptr[a + n]] = src[src_ptr[r0]:src_ptr[r0 + n]]
+            out[d0:d1] = src[s0:s1]
         else:
-            row = src[src_ptr[r0]:src_ptr[r0 + 1]]
-            out[dst_ptr[a]:dst_ptr[a + n]].reshape(n, len(row))[:] = row
-        short[a:a + n] = False
+            out[d0:d1].reshape(k, s1 - s0)[:] = src[s0:s1]
+    short = np.repeat(~long, length)
     s = np.flatnonzero(short)
     lens = dst_ptr[s + 1] - dst_ptr[s]
     out[ranges(dst_ptr[s], lens)] = src[ranges(src_ptr[rows[s]], lens)]

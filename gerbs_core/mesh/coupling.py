@@ -310,11 +310,14 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     # the rows' monomials, only those of each vertex's own degree (the others have zero
     # coefficients): Bu (SC, V MMAX) csr and the scaled Bs^T (V MMAX, SC) csc, built
     # directly in compressed form (no coo sort: these are the largest matrices)
-    active = np.arange(mmax)[None, :] < n_monomials(np.asarray(degrees))[smp.vertex][:, None]
+    per_row = n_monomials(np.asarray(degrees))[smp.vertex]       # active monomials of a row
+    active = np.arange(mmax)[None, :] < per_row[:, None]
     # (one pattern: int32 index arrays shared by both matrices, not a copy each)
     idx = np.int32 if max(V * mmax, active.size, L) < 2 ** 31 - 1 else np.int64
     cols = (smp.vertex[:, None] * mmax + np.arange(mmax))[active].astype(idx)
-    ptr = np.concatenate([[0], np.cumsum(active.sum(axis=1))]).astype(idx)
+    ptr = np.zeros(SC + 1, dtype=idx)
+    np.cumsum(per_row, out=ptr[1:])
+    del per_row
     bu = smp.Bu[active]
     Bu = sp.csr_matrix((bu, cols, ptr), shape=(SC, V * mmax))
     # Bs = Bu / h_v^|m| entry by entry (the values of smp.Bs, without its dense array)
@@ -322,13 +325,17 @@ def coupled_fits(chosen, rhs, normals, degrees, smp, rule, h, dmax,
     del bu, active
     # per vertex normal matrices of data + agreement + tension (block diagonal B^T W B)
     N = normals.copy()
-    G2 = (BsT @ sp.diags(wa + wt) @ BsT.T).tocoo()
+    # (the rows' weights scale BsT's columns in place of a product with a diagonal matrix)
+    BsTw = sp.csc_matrix((BsT.data * np.repeat(wa + wt, np.diff(BsT.indptr)), BsT.indices,
+                          BsT.indptr), shape=BsT.shape)
+    G2 = (BsTw @ BsT.T).tocoo()
+    del BsTw
     N[G2.row // mmax, G2.row % mmax, G2.col % mmax] += G2.data
     Pinv = np.zeros_like(N)
     for d in np.unique(degrees).tolist():
         vs = np.flatnonzero(degrees == d)
         M = n_monomials(d)
-        Pinv[vs, :M, :M] = pinned_normal_inverse(N[vs, :M, :M], d)
+        Pinv[vs, :M, :M] = pinned_normal_inverse(N[vs, :M, :M], d, certified=True)
     Pinv = Pinv / h[:, None, None] ** deg[None, :, None]      # unscale: c = scaled / h^|m|
     # the one-entry-per-row matrices share their arrays (the pointers 0..SC, the column
     # indices of the diagonals, the ones): the model keeps them for partial updates

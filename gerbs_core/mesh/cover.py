@@ -15,6 +15,8 @@ from functools import cached_property
 
 import numpy as np
 
+from .arrays import unique_rows
+
 __all__ = ["StarCover", "star_cover", "star_boundary", "require_cover"]
 
 
@@ -81,7 +83,7 @@ def far_corner_polar(topo, charts, corners2d):
         th[cs, :n - 1], rr[cs, :n - 1] = t, r
     key = np.round(np.concatenate([count[:, None], th - th[:, :1], rr], axis=1), 11)
     key[:, 1:W + 1] = np.where(np.arange(W) < count[:, None], key[:, 1:W + 1], 0.0)
-    _, shape = np.unique(key, axis=0, return_inverse=True)
+    shape = unique_rows(key)[1]
     return th, rr, count, shape.reshape(-1)
 
 
@@ -137,7 +139,7 @@ def build_envelopes(topo, charts, corners2d, kappa=0.8, shrink=0.95, exact=False
             key = shape[stars]
             if fixed is not None and not cl:
                 key = np.column_stack([key, fixed[vs, 0] + 2 * fixed[vs, 1]])
-            _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+            first, inv = unique_rows(key)
             corner_env[stars] = (n_env + inv.reshape(-1))[:, None]
             start = charts.theta0[stars[:, 0]] if cl else th[stars[:, 0], 0]
             env_offset[stars] = start[:, None]

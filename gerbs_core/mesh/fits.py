@@ -71,24 +71,70 @@ def shared_rows(N: np.ndarray, fn):
     return fn(N[distinct])[back.ravel()]
 
 
-def pinned_normal_inverse(N: np.ndarray, degree: int) -> np.ndarray:
+def pinned_normal_inverse(N: np.ndarray, degree: int, certified: bool = False) -> np.ndarray:
     """Truncated pseudo-inverses (K, M, M) of normal matrices N (K, M, M) of scaled-monomial
     fits, in the bending metric: c = P @ (B^T W t) is the smoothest minimiser. Equal
-    matrices are factored once (:func:`shared_rows`)."""
-    return shared_rows(np.asarray(N, dtype=np.float64),
-                       lambda Nd: _pinned_normal_inverse(Nd, degree))
+    matrices are factored once (:func:`shared_rows`). ``certified``: where a Cholesky
+    factorization certifies that no eigenvalue is truncated, the plain inverse from it
+    (:func:`_certified_inverse`: the same matrix to rounding, ~3x faster than the
+    eigendecomposition), the eigendecomposition elsewhere."""
+    fn = _certified_pinned_inverse if certified else _pinned_normal_inverse
+    return shared_rows(np.asarray(N, dtype=np.float64), lambda Nd: fn(Nd, degree))
+
+
+# the certified inverse's bound on the condition (in the bending metric): far below 1 / RCOND
+# (no eigenvalue near the truncation), and small enough that it and the eigendecomposition's
+# inverse agree to rounding (measured: 1e-12 relative on Suzanne's coupled fits)
+CERTIFIED_CONDITION = 1e6
+
+
+@lru_cache(maxsize=None)
+def _gram_inverse_factor(degree: int) -> np.ndarray:
+    """L^-1 (M, M) with G = L L^T the bending Gram matrix: coordinates z = L^T c."""
+    arr = np.linalg.inv(np.linalg.cholesky(bending_gram(degree)))
+    arr.flags.writeable = False
+    return arr
 
 
 def _pinned_normal_inverse(N: np.ndarray, degree: int) -> np.ndarray:
-    G = bending_gram(degree)
-    L = np.linalg.cholesky(G)
-    Li = np.linalg.inv(L)                       # G = L L^T; coordinates z = L^T c
+    Li = _gram_inverse_factor(degree)
     Nz = Li @ N @ Li.T
     lam, Q = np.linalg.eigh(Nz)
     top = lam[..., -1:]
     inv = np.where(lam > RCOND * np.maximum(top, 1e-300), 1.0 / np.where(lam > 0, lam, 1.0), 0.0)
     Pz = (Q * inv[..., None, :]) @ np.swapaxes(Q, -1, -2)
     return Li.T @ Pz @ Li
+
+
+def _certified_inverse(Nz: np.ndarray):
+    """(Nz^-1 (K, M, M), certified (K,) bool) for symmetric Nz (K, M, M) from Cholesky
+    factors Nz = Lz Lz^T: with Lzi = Lz^-1, Nz^-1 = Lzi^T Lzi and trace(Nz) trace(Nz^-1)
+    >= lam_max / lam_min, so a product below CERTIFIED_CONDITION certifies that the
+    truncated pseudo-inverse truncates nothing: it is this inverse. None when some matrix
+    is not positive definite (numpy factors the stack at once)."""
+    try:
+        Lz = np.linalg.cholesky(Nz)
+    except np.linalg.LinAlgError:
+        return None
+    Lzi = np.linalg.inv(Lz)
+    bound = np.trace(Nz, axis1=1, axis2=2) * (Lzi * Lzi).sum(axis=(1, 2))
+    return Lzi, bound < CERTIFIED_CONDITION
+
+
+def _certified_pinned_inverse(N: np.ndarray, degree: int) -> np.ndarray:
+    """:func:`_pinned_normal_inverse` to rounding, from Cholesky factors where they certify
+    that no eigenvalue is truncated (the others by the eigendecomposition)."""
+    Li = _gram_inverse_factor(degree)
+    got = _certified_inverse(Li @ N @ Li.T) if len(N) else None
+    if got is None:
+        return _pinned_normal_inverse(N, degree)
+    Lzi, ok = got
+    T = Lzi @ Li                                 # P = Li^T Nz^-1 Li = T^T T
+    out = np.swapaxes(T, -1, -2) @ T
+    if not ok.all():
+        bad = np.flatnonzero(~ok)
+        out[bad] = _pinned_normal_inverse(N[bad], degree)
+    return out
 
 
 class CandidateFits:
@@ -108,11 +154,18 @@ class CandidateFits:
         self.alias = alias
 
 
-def _data_weights(y, use):
+def _data_weights(y, use, inverse_square=None):
     """1 / |y|^2 for scaled chart positions y (h = 1) of the data used, 0 elsewhere: near
-    data count more (the fit is used near its vertex)."""
+    data count more (the fit is used near its vertex). ``inverse_square``: the weights of
+    all data (:func:`_inverse_squares` of y), when several rules weigh the same y."""
+    q = _inverse_squares(y) if inverse_square is None else inverse_square
+    return np.where(use, q, 0.0)
+
+
+def _inverse_squares(y):
+    """1 / |y|^2 (0 at y = 0) of scaled chart positions y (..., 2)."""
     d = np.hypot(y[..., 0], y[..., 1])
-    return np.where(use & (d > 0), 1.0 / np.where(d > 0, d, 1.0) ** 2, 0.0)
+    return np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0) ** 2, 0.0)
 
 
 def _normal(B, w):
@@ -188,6 +241,7 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
     y = rings.y[idx] / rings.h[vs][:, None, None]
     h = rings.h[vs]
     Ball = monomials(y, dmax)[0]                          # (K, n, M_max)
+    iq = _inverse_squares(y)                              # every rule's data weights
     q = rings.ids[idx]
     done = {}                                             # (d, 2) -> its normal matrices
     # the wider rules first, so that a ring-1 rule's fallback can take theirs
@@ -199,7 +253,7 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
         if layers < 2:
             # the condition only where ring 1 holds enough data (else ring 2 is taken anyway)
             s = np.flatnonzero(n1[vs] >= M + 2)
-            N1 = _normal(B[s], _data_weights(y[s], real[s] & (ring[s] <= 1)))
+            N1 = _normal(B[s], _data_weights(y[s], real[s] & (ring[s] <= 1), iq[s]))
             lam = shared_rows(N1, np.linalg.eigvalsh)
             cond = lam[:, -1] / np.maximum(lam[:, 0], 1e-300)
             use_layers[:] = 2
@@ -212,24 +266,25 @@ def _fit_chunk(rings, rules, acc, vs, n, cnt, n1, n2, wider, dmax):
             own = np.flatnonzero(use_layers < 2)
             if len(own):
                 use, N, A, bw = _fit(y[own], B[own], real[own] & (ring[own] <= layers),
-                                     h[own], degree)
+                                     h[own], degree, iq[own])
                 a["normal"][vs[own]] = N
                 a["blocks"].append(_compact(vs[own], use, q[own], A, bw))
             continue
         use_layers = np.where((use_layers == 2) & (n2[vs] < M + 2), wider, use_layers)
-        use, N, A, bw = _fit(y, B, real & (ring <= use_layers[:, None]), h, degree)
+        use, N, A, bw = _fit(y, B, real & (ring <= use_layers[:, None]), h, degree, iq)
         a["normal"][vs] = N
         a["blocks"].append(_compact(vs, use, q, A, bw))   # A, bw: zero off the used data
         if layers == 2:
             done[(degree, layers)] = N
 
 
-def _fit(y, B, use, h, degree):
+def _fit(y, B, use, h, degree, inverse_square=None):
     """(use, N (K, M, M), A (K, M, n), bw (K, M, n)) of the fits of the data ``use`` (K, n)
     at scaled chart positions y (K, n, 2), designs B (K, n, M), chart scales h (K,):
     normal matrices, the unscaled operators (A, zero off the used data) and the
-    weighted designs (the normal equations' right-hand sides)."""
-    w = _data_weights(y, use)
+    weighted designs (the normal equations' right-hand sides). ``inverse_square``: the
+    chunk's 1 / |y|^2 (:func:`_inverse_squares`, shared by its rules) if made already."""
+    w = _data_weights(y, use, inverse_square)
     w /= np.maximum(w.sum(1, keepdims=True), 1e-300)      # per vertex: weights sum to 1
     bw = np.swapaxes(B * w[..., None], 1, 2)              # (K, M, n)
     N = bw @ B
@@ -243,75 +298,80 @@ def _compact(vs, use, q, A, bw):
     """One chunk's csr rows: vertex k's rows hold the used data ids q (K, n) and the pin
     (column v, minus the row's sum) with the operator values A and the right-hand-side
     values bw (K, M, n; zero off the used data). Compact form (vs, cols (K, r), nr (K,),
-    vals (K, M, r), hvals (K, M, r)) -- the nr[k] columns by increasing column, one sort
-    per vertex (all rows of a vertex share its columns) -- when no vertex is reached by
-    several unfoldings (grids, flat meshes); else coordinates (rows, cols, vals, hvals),
-    data then pins, for scipy to sort and sum (``rows`` an int array marks this form)."""
+    rank (K, n + 1), A, bw) -- vertex k's nr[k] columns by increasing column (all rows of
+    a vertex share its columns), rank[k, j] the slot of its data j (j = n: the pin), the
+    unused data ranked at nr[k] or later -- when no vertex is reached by several
+    unfoldings (grids, flat meshes); else coordinates (rows, cols, vals, hvals), data
+    then pins, for scipy to sort and sum."""
     V = np.iinfo(np.int64).max
     cols = np.concatenate([np.where(use, q, V), vs[:, None]], axis=1)  # unused: last
     order = np.argsort(cols, axis=1, kind="stable")
     cols = np.take_along_axis(cols, order, axis=1)
     if np.any((cols[:, 1:] == cols[:, :-1]) & (cols[:, 1:] < V)):
-        K, M, _ = A.shape
-        kk, nn = np.nonzero(use)
-        r = vs[:, None] * M + np.arange(M)
-        return (np.concatenate([r[kk].ravel(), r.ravel()]),
-                np.concatenate([np.repeat(q[kk, nn], M), np.repeat(vs, M)]),
-                np.concatenate([A[kk, :, nn].ravel(), -A.sum(2).ravel()]),
-                np.concatenate([bw[kk, :, nn].ravel(), -bw.sum(2).ravel()]))
+        return _coo_rows(vs, use, q, A, bw)
     nr = (cols < V).sum(1)
-    r = int(nr.max())
-    X = np.concatenate([A, bw], axis=1)                 # A and bw with their pins, stacked
-    X = np.concatenate([X, np.concatenate([-A.sum(2), -bw.sum(2)], axis=1)[..., None]], axis=2)
-    X = np.take_along_axis(X, order[:, None, :r], axis=2)
-    M = A.shape[1]
-    return vs, cols[:, :r], nr, X[:, :M], X[:, M:]
+    rank = np.empty_like(order)
+    np.put_along_axis(rank, order, np.arange(order.shape[1]), axis=1)
+    return vs, cols[:, :int(nr.max())], nr, rank, A, bw
+
+
+def _coo_rows(vs, use, q, A, bw):
+    """A chunk's rows as coordinates (rows, cols, vals, hvals): the used data, then the
+    pins."""
+    K, M, _ = A.shape
+    kk, nn = np.nonzero(use)
+    r = vs[:, None] * M + np.arange(M)
+    return (np.concatenate([r[kk].ravel(), r.ravel()]),
+            np.concatenate([np.repeat(q[kk, nn], M), np.repeat(vs, M)]),
+            np.concatenate([A[kk, :, nn].ravel(), -A.sum(2).ravel()]),
+            np.concatenate([bw[kk, :, nn].ravel(), -bw.sum(2).ravel()]))
 
 
 def _block_rows(blocks, V, M):
     """The operator and right-hand-side csr matrices (V M, V), canonical, from the chunks'
-    rows (:func:`_compact`): all compact -- the rows' lengths known -- written straight
-    into the csr arrays; else every chunk as coordinates, sorted and summed by scipy."""
+    rows (:func:`_compact`): all compact -- the rows' lengths known -- every value
+    scattered once from A and bw straight to its csr slot (the unused data to one spare
+    slot past the end); else every chunk as coordinates, sorted and summed by scipy."""
     shape = (V * M, V)
     if any(len(b) == 4 for b in blocks):
-        parts = [b if len(b) == 4 else _coordinates(*b, M) for b in blocks]
+        parts = [b if len(b) == 4 else _coo_rows(b[0], b[3][:, :-1] < b[2][:, None],
+                                                 _data_ids(b), b[4], b[5]) for b in blocks]
         rows, cols = (np.concatenate([p[i] for p in parts]) for i in (0, 1))
         return tuple(sp.csr_matrix((np.concatenate([p[i] for p in parts]), (rows, cols)),
                                    shape=shape) for i in (2, 3))
     nrow = np.zeros(V, dtype=np.int64)
-    for vs, _, nr, _, _ in blocks:
+    for vs, _, nr, _, _, _ in blocks:
         nrow[vs] = nr
     indptr = np.zeros(V * M + 1, dtype=np.int64)
     np.cumsum(np.repeat(nrow, M), out=indptr[1:])
     nnz = int(indptr[-1])
     indices = np.empty(nnz, dtype=np.int32 if V < 2 ** 31 - 1 else np.int64)
-    out = [np.empty(nnz), np.empty(nnz)]
-    for vs, cols, nr, vals, hvals in blocks:
-        pos, ok = _slots(indptr, vs, nr, cols.shape[1], M)
-        full = bool(ok.all())
-        where = pos.ravel() if full else pos[ok]
-        c = np.broadcast_to(cols[:, None, :], pos.shape)
-        indices[where] = c.ravel() if full else c[ok]
-        for o, X in zip(out, (vals, hvals)):
-            o[where] = X.ravel() if full else X[ok]
-    return (sp.csr_matrix((out[0], indices, indptr), shape=shape),
-            sp.csr_matrix((out[1], indices.copy(), indptr.copy()), shape=shape))
+    out = [np.empty(nnz + 1), np.empty(nnz + 1)]          # + the spare slot
+    for vs, cols, nr, rank, A, bw in blocks:
+        r = cols.shape[1]
+        start = indptr[:-1][vs[:, None] * M + np.arange(M)]           # (K, M)
+        slot = np.where(rank < nr[:, None], rank, nnz)                # (K, n + 1)
+        pos = np.where(slot[:, None, :] < nnz, start[:, :, None] + slot[:, None, :], nnz)
+        for o, X in zip(out, (A, bw)):
+            o[pos[:, :, :-1]] = X
+            o[pos[:, :, -1]] = -X.sum(2)
+        # the columns: each row's r slots (those below nr real)
+        cpos = start[:, :, None] + np.arange(r)
+        ok = np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], cpos.shape)
+        c = np.broadcast_to(cols[:, None, :], cpos.shape)
+        if ok.all():
+            indices[cpos.ravel()] = c.ravel()
+        else:
+            indices[cpos[ok]] = c[ok]
+    return (sp.csr_matrix((out[0][:nnz], indices, indptr), shape=shape),
+            sp.csr_matrix((out[1][:nnz], indices.copy(), indptr.copy()), shape=shape))
 
 
-def _slots(indptr, vs, nr, r, M):
-    """(pos (K, M, r), ok (K, M, r)): csr positions of the compact entries, and which are
-    real (slot < nr)."""
-    pos = indptr[:-1][vs[:, None] * M + np.arange(M)][:, :, None] + np.arange(r)
-    ok = np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], pos.shape)
-    return pos, ok
-
-
-def _coordinates(vs, cols, nr, vals, hvals, M):
-    """A compact chunk (:func:`_compact`) as coordinates (rows, cols, vals, hvals)."""
-    r = cols.shape[1]
-    rows = np.broadcast_to((vs[:, None] * M + np.arange(M))[:, :, None], vals.shape)
-    ok = np.broadcast_to((np.arange(r) < nr[:, None])[:, None, :], vals.shape)
-    return rows[ok], np.broadcast_to(cols[:, None, :], vals.shape)[ok], vals[ok], hvals[ok]
+def _data_ids(block):
+    """The data ids (K, n) of a compact chunk (:func:`_compact`), from its sorted columns
+    and ranks (the unused data: any id, they are masked)."""
+    _, cols, nr, rank, _, _ = block
+    return np.take_along_axis(cols, np.minimum(rank[:, :-1], cols.shape[1] - 1), axis=1)
 
 
 def _canonical(A):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arrays import read_only as _ro
+from .arrays import unique_rows
 from .lattice_templates import face_counts, template_edges, template_faces, variant_rows
 
 __all__ = ["corner_counts", "polygon_table", "output_edges"]
@@ -113,7 +114,7 @@ def _merge_repeats(lat, quads: bool, ev, ce, inner_of):
     cand = np.concatenate([inner_of[f] + np.arange(nin[int(tp.face_sizes[f])])
                            for f in faces.tolist()])
     pair = np.sort(ev[cand], axis=1)
-    _, first, inv = np.unique(pair, axis=0, return_index=True, return_inverse=True)
+    first, inv = unique_rows(pair)
     if len(first) < len(cand):
         remap = np.arange(len(ev), dtype=i32)
         remap[cand] = cand[first[inv.ravel()]]

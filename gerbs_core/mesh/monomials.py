@@ -45,6 +45,26 @@ def powers(t: np.ndarray, degree: int) -> list:
     return out
 
 
+def monomial_gradients(y: np.ndarray, degree: int) -> np.ndarray:
+    """(2, N, M): d/dy1 then d/dy2 of the monomials at chart points y (N, 2), bit for bit
+    ``monomials(y, degree, 1)[1]``'s two slices, each written contiguously (the rows of
+    both derivatives stacked, as one product with the coefficients takes them)."""
+    y = np.asarray(y, dtype=np.float64)
+    E = monomial_exponents(degree)
+    p = (powers(y[:, 0], degree), powers(y[:, 1], degree))
+    d = np.zeros((2, len(y), len(E)))
+    col = np.empty(len(y))
+    for i, (a, b) in enumerate(E):
+        # the products of monomials(): (a * p1^(a-1)) * p2^b and (b * p1^a) * p2^(b-1)
+        if a:
+            np.multiply(p[0][a - 1], float(a), out=col)
+            np.multiply(col, p[1][b], out=d[0, :, i])
+        if b:
+            np.multiply(p[0][a], float(b), out=col)
+            np.multiply(col, p[1][b - 1], out=d[1, :, i])
+    return d
+
+
 def monomials(y: np.ndarray, degree: int, nu: int = 0):
     """Monomials of chart points y (..., 2) and their derivatives, exact.
 

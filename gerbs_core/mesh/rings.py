@@ -122,7 +122,9 @@ def _distinct(v, q, y, scale):
     round-off), compared with the previous kept placement of the same (v, q) so the result
     does not depend on the input order."""
     ang = np.arctan2(y[:, 1], y[:, 0])
-    order = np.lexsort((ang, q, v))
+    # (v, q) as one integer key: the order of lexsort((ang, q, v)) with one key less
+    span = int(q.max()) + 1 if len(q) else 1
+    order = np.lexsort((ang, v.astype(np.int64) * span + q))
     v, q, y = v[order], q[order], y[order]
     tol = 1e-9 * scale[v]
     keep = np.ones(len(v), dtype=bool)
@@ -169,7 +171,8 @@ def data_rings(topo, charts, corners2d, layers: int = 2, min_data: int = 7) -> D
     q = np.concatenate([p[1] for p in parts])
     y = np.concatenate([p[2] for p in parts])
     ring = np.concatenate([np.full(len(p[0]), p[3]) for p in parts])
-    order = np.lexsort((q, ring, v))
+    span = int(ring.max()) + 1 if len(ring) else 1
+    order = np.lexsort((q, v.astype(np.int64) * span + ring))     # by (v, ring), then q
     v, q, y, ring = v[order], q[order], y[order], ring[order]
     offsets = np.zeros(V + 1, dtype=np.int64)
     np.cumsum(np.bincount(v, minlength=V), out=offsets[1:])

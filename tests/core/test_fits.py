@@ -7,7 +7,8 @@ from gerbs_core.mesh.charts import vertex_charts
 from gerbs_core.mesh.fits import (CANDIDATES, candidate_fits, candidate_fits_all,
                                   pinned_normal_inverse)
 from gerbs_core.mesh.layout import face_layouts
-from gerbs_core.mesh.monomials import bending_gram, monomial_exponents, monomials, n_monomials
+from gerbs_core.mesh.monomials import (bending_gram, monomial_exponents, monomial_gradients,
+                                       monomials, n_monomials)
 from gerbs_core.mesh.rings import data_rings
 from gerbs_core.mesh.topology import MeshTopology
 
@@ -153,3 +154,40 @@ def test_bending_gram_is_rotation_invariant_and_definite():
         A = np.linalg.lstsq(monomials(y, d)[0], monomials(y @ R.T, d)[0], rcond=None)[0]
         assert np.allclose(np.sort(np.linalg.eigvalsh(A.T @ G @ A)), np.sort(np.linalg.eigvalsh(G)),
                            rtol=1e-8)
+
+
+@pytest.mark.parametrize("degree", [2, 3, 4])
+def test_certified_inverse_is_the_pinned_inverse_to_rounding(degree):
+    """Cholesky-certified inverses equal the truncated pseudo-inverses to rounding where
+    nothing is truncated, and defer to them where something is: a rank-deficient matrix
+    in a stack (the Cholesky of the stack fails) and an ill-conditioned one (the
+    certificate fails) give exactly the eigendecomposition's pseudo-inverses."""
+    rng = np.random.default_rng(degree)
+    M = n_monomials(degree)
+    B = rng.normal(size=(40, 3 * M, M))
+    N = np.swapaxes(B, 1, 2) @ B
+    ref = pinned_normal_inverse(N, degree)
+    got = pinned_normal_inverse(N, degree, certified=True)
+    assert np.abs(got - ref).max() <= 1e-12 * np.abs(ref).max()
+    low = N.copy()
+    low[3] = np.outer(B[3, 0], B[3, 0])                  # rank 1: truncated
+    assert np.array_equal(pinned_normal_inverse(low, degree, certified=True),
+                          pinned_normal_inverse(low, degree))
+    Q, _ = np.linalg.qr(rng.normal(size=(M, M)))
+    bad = N.copy()
+    bad[5] = (Q * np.geomspace(1.0, 1e-7, M)) @ Q.T     # definite, condition 1e7
+    out = pinned_normal_inverse(bad, degree, certified=True)
+    assert np.array_equal(out[5], pinned_normal_inverse(bad[5:6], degree)[0])
+    assert np.abs(out[:5] - ref[:5]).max() <= 1e-12 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3, 4])
+def test_monomial_gradients_are_the_monomials_derivatives_bit_for_bit(degree):
+    y = np.random.default_rng(degree).normal(size=(300, 2))
+    y[:3] = [[0.0, 0.0], [-0.0, 1.5], [2.0, -0.0]]          # zeros, signed zeros
+    d = monomials(y, degree, 1)[1]
+    g = monomial_gradients(y, degree)
+    assert g.shape == (2, 300, n_monomials(degree))
+    for j in (0, 1):
+        assert np.array_equal(g[j], d[..., j])
+        assert np.array_equal(np.signbit(g[j]), np.signbit(d[..., j]))
