@@ -52,7 +52,7 @@ from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomial_gradients, monomials, n_monomials
 from .row_values import (candidate_coefs, candidate_values, chunks, copy_aliases, own_rows,
                          per_degree, row_sums, square_norms)
-from .spread_fits import SPREAD, gate, spread_candidates, spread_faces
+from .spread_fits import SPREAD, gate, spread_candidates, spread_faces, star_spread
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness"]
 
@@ -339,8 +339,10 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
     (:func:`gerbs_core.mesh.crease_fits.curve_constraints`) or None."""
     V = topo.n_vertices
     cands = candidate_fits_all(rings, rule.candidates)
+    # the stars' spreads (degrees): the extra candidates' and the coupling weight's rule
+    star = star_spread(topo, X)
     # extra candidates at spread stars (mesh.spread_fits): none on smooth meshes
-    extra, spiky = spread_candidates(topo, charts, corners2d, rings, X, rule.spread) \
+    extra, spiky = spread_candidates(topo, charts, corners2d, rings, X, rule.spread, star) \
         if len(cands) > 1 else ([], None)
     cands = cands + extra
     if sharp is None:
@@ -364,18 +366,19 @@ def fair_fits(topo, charts, corners2d, cover, rings, X, rule: FairnessRule, shar
         proj = None if cons is None else cons.projection(normals, rings.h, degrees, MMAX)
         return degrees, identity_fits(chosen, proj)
     return degrees, coupled_fits(chosen, rhs, normals, degrees, smp, rule, rings.h, DMAX,
-                                 cons, mu=row_mu(topo, X, smp, rule))
+                                 cons, mu=row_mu(topo, star, smp, rule))
 
 
-def row_mu(topo, X, smp, rule: FairnessRule) -> np.ndarray | float:
+def row_mu(topo, star, smp, rule: FairnessRule) -> np.ndarray | float:
     """The coupling's agreement weight: (SC,) per energy row, ``rule.spread_mu * rule.mu``
-    on the faces of stars spreading above ``rule.spread_mu_from`` degrees
-    (:func:`gerbs_core.mesh.spread_fits.spread_faces`) and ``rule.mu`` elsewhere; the
+    on the faces of stars spreading above ``rule.spread_mu_from`` degrees (``star`` (V,)
+    the vertices' spreads, :func:`gerbs_core.mesh.spread_fits.spread_faces`) and
+    ``rule.mu`` elsewhere; the
     scalar ``rule.mu`` where no face qualifies (smooth meshes: bit-identical). A function
     of the rest shape only, so the fits stay linear in the positions."""
     if rule.spread_mu == 1.0 or rule.mu == 0.0:
         return rule.mu
-    hit = spread_faces(topo, X, rule.spread_mu_from)
+    hit = spread_faces(topo, star, rule.spread_mu_from)
     if not hit.any():
         return rule.mu
     return np.where(hit[smp.face], rule.spread_mu * rule.mu, rule.mu)

@@ -52,11 +52,11 @@ def star_spread(topo, X) -> np.ndarray:
     return out
 
 
-def spread_faces(topo, X, spread: float) -> np.ndarray:
+def spread_faces(topo, star, spread: float) -> np.ndarray:
     """(F,) bool: the faces having a corner whose cage star spreads above ``spread``
-    degrees (:func:`star_spread`, rest positions X (V, 3))."""
+    degrees, from the vertices' spreads ``star`` (V,) (:func:`star_spread`)."""
     hit = np.zeros(topo.n_faces, bool)
-    hit[topo.corner_face[(star_spread(topo, X) > spread)[topo.face_vertices]]] = True
+    hit[topo.corner_face[(np.asarray(star) > spread)[topo.face_vertices]]] = True
     return hit
 
 
@@ -111,12 +111,13 @@ def _cage_rows(topo, charts, corners2d, verts, h):
             _per_owner(w[keep], owner[keep], len(verts)))
 
 
-def spread_candidates(topo, charts, corners2d, rings, X, spread: float = SPREAD):
+def spread_candidates(topo, charts, corners2d, rings, X, spread: float = SPREAD, star=None):
     """(extra candidates (list of :class:`~gerbs_core.mesh.fits.CandidateFits`, empty
     where no star spreads), spread stars (V,) bool): the fit of the module docstring at
-    every vertex whose star spreads above ``spread`` degrees, no rows elsewhere."""
+    every vertex whose star spreads above ``spread`` degrees, no rows elsewhere. ``star``
+    (V,): the vertices' :func:`star_spread` when the caller has it already."""
     V = topo.n_vertices
-    spiky = star_spread(topo, X) > spread
+    spiky = (star_spread(topo, X) if star is None else star) > spread
     if not spiky.any():
         return [], spiky
     verts = np.flatnonzero(spiky)

@@ -54,7 +54,8 @@ def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None,
         return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints, mu=mu)
     mu = row_mu(smp, OPTS["mu_smooth"], OPTS["mu_sharp"], OPTS["rows"])
     if OPTS["mu_spread"] is not None:
-        hit = SC.spread_faces(SC.OPTS["topo"], SC.OPTS["X"], OPTS["spread"])
+        topo = SC.OPTS["topo"]
+        hit = SC.spread_faces(topo, SC.star_spread(topo, SC.OPTS["X"]), OPTS["spread"])
         mu = np.where(hit[smp.face], OPTS["mu_spread"], mu)
     return _old(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints, mu=mu)
 

@@ -20,7 +20,7 @@ OPTS = {"beta": 3.0, "spread": 60.0, "topo": None, "X": None, "rows": "face"}
 def coupled(chosen, rhs, normals, degrees, smp, rule, h, dmax, constraints=None, mu=None, _old=cp.coupled_fits):
     topo, X = OPTS["topo"], OPTS["X"]
     if OPTS["rows"] == "face":
-        hit = spread_faces(topo, X, OPTS["spread"])[smp.face]
+        hit = spread_faces(topo, star_spread(topo, X), OPTS["spread"])[smp.face]
     else:
         hit = (star_spread(topo, X) > OPTS["spread"])[smp.vertex]
     smp = dataclasses.replace(smp, weight=smp.weight * np.where(hit, OPTS["beta"], 1.0))
