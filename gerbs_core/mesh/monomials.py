@@ -50,19 +50,24 @@ def monomial_gradients(y: np.ndarray, degree: int) -> np.ndarray:
     ``monomials(y, degree, 1)[1]``'s two slices, each written contiguously (the rows of
     both derivatives stacked, as one product with the coefficients takes them)."""
     y = np.asarray(y, dtype=np.float64)
-    E = monomial_exponents(degree)
-    p = (powers(y[:, 0], degree), powers(y[:, 1], degree))
-    d = np.zeros((2, len(y), len(E)))
-    col = np.empty(len(y))
-    for i, (a, b) in enumerate(E):
-        # the products of monomials(): (a * p1^(a-1)) * p2^b and (b * p1^a) * p2^(b-1)
-        if a:
-            np.multiply(p[0][a - 1], float(a), out=col)
-            np.multiply(col, p[1][b], out=d[0, :, i])
-        if b:
-            np.multiply(p[0][a], float(b), out=col)
-            np.multiply(col, p[1][b - 1], out=d[1, :, i])
+    d = np.zeros((2, len(y), n_monomials(degree)))
+    _write_gradients(powers(y[:, 0], degree), powers(y[:, 1], degree), degree, d[0], d[1])
     return d
+
+
+def _write_gradients(p1, p2, degree: int, d1, d2) -> None:
+    """The monomials' d/dy1 and d/dy2 into d1, d2 (..., M) (zero-filled; views of any
+    layout) from the powers p1, p2 of the two chart coordinates: (a p1^(a-1)) p2^b and
+    (b p1^a) p2^(b-1), the one formula of :func:`monomials` and
+    :func:`monomial_gradients`."""
+    col = np.empty(np.shape(p1[0]))
+    for i, (a, b) in enumerate(monomial_exponents(degree)):
+        if a:
+            np.multiply(p1[a - 1], float(a), out=col)
+            np.multiply(col, p2[b], out=d1[..., i])
+        if b:
+            np.multiply(p1[a], float(b), out=col)
+            np.multiply(col, p2[b - 1], out=d2[..., i])
 
 
 def monomials(y: np.ndarray, degree: int, nu: int = 0):
@@ -81,11 +86,7 @@ def monomials(y: np.ndarray, degree: int, nu: int = 0):
     out = [m]
     if nu >= 1:
         d = np.zeros(shape + (M, 2))
-        for i, (a, b) in enumerate(E):
-            if a:
-                d[..., i, 0] = a * p1[a - 1] * p2[b]
-            if b:
-                d[..., i, 1] = b * p1[a] * p2[b - 1]
+        _write_gradients(p1, p2, degree, d[..., 0], d[..., 1])
         out.append(d)
     if nu >= 2:
         h = np.zeros(shape + (M, 2, 2))
