@@ -18,6 +18,8 @@ def delaunay_candidates(tri, simplices, x):
     # small tolerance: points on the hull boundary belong to the domain
     simp = tri.find_simplex(x, tol=1e-12)
     ok = simp >= 0
+    if ok.all():               # (every query inside the hull: gathers without the masks)
+        return simplices[simp], 3 * simp[:, None] + np.arange(3)
     idx = np.where(ok[:, None], simplices[np.maximum(simp, 0)], -1)
     edge = np.where(ok[:, None], 3 * np.maximum(simp, 0)[:, None] + np.arange(3), -1)
     return idx, edge
