@@ -114,3 +114,19 @@ def test_no_correction_where_nothing_turns_sharply(mesh):
 def test_rule_refuses_bad_settings(field, value):
     with pytest.raises(InvalidParameterError, match=field):
         FairnessRule(**{field: value})
+
+
+def test_a_fairing_over_the_memory_limit_is_skipped_and_said(monkeypatch):
+    """Where the fairing's lattice would need more memory than the build may use, the surface
+    is built without it (the same surface as turn = 180) and a ``fairing_skipped`` warning
+    says so."""
+    from gerbs_core.mesh import memory
+
+    V, F = P.suzanne()
+    monkeypatch.setattr(memory, "FAIRING_BYTES_PER_POINT", 1e6)   # 31k points: 31 GB
+    s = BlendingSurface(V, F)
+    assert not isinstance(s.model.fits, FairedFits)
+    assert [w.tag for w in s.warnings] == ["fairing_skipped"]
+    assert "not faired" in s.warnings[0].message
+    off = BlendingSurface(V, F, fairness=OFF)
+    assert np.array_equal(s.tessellate(2)[0], off.tessellate(2)[0])
