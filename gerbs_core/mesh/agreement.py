@@ -104,7 +104,7 @@ class FairnessRule:
     turn: float = 35.0
     turn_resolution: int = 8
     turn_weight: float = 0.03
-    turn_iterations: int = 80
+    turn_iterations: int = 40
     turn_degree: int = 4
     # only faces having a corner whose cage star spreads above this (degrees) are looked
     # at (smooth fine meshes: no lattice is made)

@@ -40,10 +40,10 @@ adds it to the coupled fits. Interpolation, the partition of unity and smoothnes
 untouched: only coefficients of degree >= 1 change, S = X_v at every vertex.
 
 Exact: the correction is applied exactly as a linear map. Approximate: the weights are
-where L-BFGS stops (``rule.turn_iterations``; deterministic for the same inputs and
-arithmetic, but a local minimum of a non-convex problem: perturbing the rest shape by
-1e-15 relative moves Suzanne's surface by up to ~2e-4 and the cow's by ~2e-3 of their
-sizes, with the same fold counts at r = 8).
+where L-BFGS stops (``rule.turn_iterations``) in a non-convex problem: deterministic for
+the same inputs and arithmetic, but round-off of the rest shape can move the surface
+(perturbations of 1e-15 relative: Suzanne by 2e-9, the cow by up to 9e-4 of its size 1,
+the fold counts at r = 8 unchanged; docs/design.md, "Fairing").
 """
 from __future__ import annotations
 

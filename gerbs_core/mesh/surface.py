@@ -7,12 +7,14 @@ geometry checks -> face layouts with the rest edge lengths (:mod:`.layout`) ->
 vertex charts (:mod:`.charts`) -> the star cover of smooth size functions
 (:mod:`.cover`) -> data rings and candidate fits (:mod:`.rings`, :mod:`.fits`)
 -> the choice and coupling that make neighbouring local functions agree
-(:mod:`.agreement`) -> evaluation (:mod:`.evaluate`), tessellation
+(:mod:`.agreement`) -> the fairing that bounds how sharply the surface turns
+(:mod:`.fairing`) -> evaluation (:mod:`.evaluate`), tessellation
 (:mod:`.lattice`) and stencils (:mod:`.stencil`). docs/design.md describes the
 design and the measurements behind it.
 
-Exact: everything is closed form up to round-off, except the kernel's F
-(tabulated to ~1e-13, :mod:`gerbs_core.kernels`). Near every vertex Psi_v = 1,
+Exact: everything is closed form up to round-off, except the kernel's F (tabulated to
+~1e-13, :mod:`gerbs_core.kernels`) and the fairing's weights (where its optimiser stops,
+:mod:`.fairing`; the output is still exactly linear in X). Near every vertex Psi_v = 1,
 so S = l_v there and S(v) = X_v.
 """
 from __future__ import annotations
