@@ -1,0 +1,98 @@
+"""The add-on writes only its own data: whatever the modifier's hidden inputs point at,
+whatever the build gives, the user's meshes are never overwritten and nothing that is not
+a surface is shown, applied or exported."""
+import bpy
+import numpy as np
+import pytest
+
+from .helpers import base_positions, evaluated
+
+pytestmark = pytest.mark.blender
+
+
+def _gerbs_marks(mesh) -> list:
+    """What the add-on would have left on `mesh` by writing a result into it."""
+    from blender_addon import ids
+
+    names = [a.name for a in mesh.attributes if a.name.startswith(".gerbs")]
+    return names + [k for k in (ids.RECORD_STAMP, ids.RESULT_TAG) if k in mesh]
+
+
+def _cube_with_surface(resolution=3, **settings):
+    from blender_addon import api
+
+    bpy.ops.mesh.primitive_cube_add()
+    cube = bpy.context.active_object
+    mod = api.add_surface(cube, resolution=resolution, **settings)
+    return cube, mod
+
+
+# 8 vertices, 12 edges, 6 quads at resolution 3
+CUBE_R3 = 8 + 12 * 2 + 6 * 4
+
+
+@pytest.mark.parametrize("how", ["remap_object", "remap_mesh", "set_input"])
+def test_a_result_input_pointing_at_a_users_object_never_writes_it(blender, how):
+    """Remap Users of the hidden result onto the user's torus (object or mesh), or a script
+    setting the hidden input: the torus keeps its mesh, the modifier gets a fresh result of
+    its own and shows the surface (before: the torus's 576 vertices were overwritten)."""
+    from blender_addon import api, ids
+    from blender_addon import geometry_nodes as gn
+
+    bpy.ops.mesh.primitive_torus_add(location=(4, 0, 0))
+    torus = bpy.context.active_object
+    T = base_positions(torus)
+    cube, mod = _cube_with_surface()
+    result = gn.get_result(mod)
+    if how == "remap_object":
+        result.user_remap(torus)
+    elif how == "remap_mesh":
+        result.data.user_remap(torus.data)
+        assert gn.get_result(mod).data == torus.data
+    else:
+        gn.set_result(mod, torus)
+    cube.data.vertices[0].co.z += 0.1
+    cube.data.update()
+    P = evaluated(cube)
+    assert len(torus.data.vertices) == 576 and np.array_equal(base_positions(torus), T)
+    assert _gerbs_marks(torus.data) == []
+    own = gn.get_result(mod)
+    assert own not in (torus, None) and own.get(ids.RESULT_TAG) and own.data != torus.data
+    assert len(P) == CUBE_R3 and api.status(cube)["error"] == ""
+    assert P[0, 2] == pytest.approx(base_positions(cube)[0, 2])  # the moved cube's surface
+
+
+def test_a_result_input_pointing_at_the_base_object_never_writes_its_mesh(blender):
+    from blender_addon import api
+    from blender_addon import geometry_nodes as gn
+
+    cube, mod = _cube_with_surface(resolution=3, render_resolution=2)
+    X = base_positions(cube)
+    for render in (False, True):
+        gn.set_result(mod, cube, render)
+    cube.update_tag()
+    P = evaluated(cube)
+    assert len(cube.data.vertices) == 8 and np.array_equal(base_positions(cube), X)
+    assert _gerbs_marks(cube.data) == []
+    assert len(P) == CUBE_R3 and api.status(cube)["error"] == ""
+    assert cube not in (gn.get_result(mod), gn.get_result(mod, True))
+    api.update(cube, force=True)  # a Rebuild writes the fresh results only, too
+    assert len(cube.data.vertices) == 8 and _gerbs_marks(cube.data) == []
+
+
+def test_a_result_mesh_another_object_uses_is_not_written(blender):
+    """A user object made from the hidden result's mesh (e.g. to keep a copy of the surface)
+    keeps it: the add-on makes a new result instead of changing a mesh someone else shows."""
+    from blender_addon import geometry_nodes as gn
+
+    cube, mod = _cube_with_surface()
+    kept = bpy.data.objects.new("Kept", gn.get_result(mod).data)
+    bpy.context.scene.collection.objects.link(kept)
+    K = base_positions(kept)
+    cube.data.vertices[0].co.z += 0.1
+    cube.data.update()
+    P = evaluated(cube)
+    assert np.array_equal(base_positions(kept), K)
+    assert gn.get_result(mod).data != kept.data
+    assert np.abs(P - K).max() > 0.01  # the cube shows its new surface
+
