@@ -293,6 +293,8 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
             and len(res.data.vertices) == st.n_points and np.all(np.isfinite(inp.positions))):
         X = inp.positions.astype(np.float64)
         points, moved = apply_stencil(st, X)
+        if points is None:  # beyond float32: a rebuild reports it (not_finite_message)
+            return None
         if carried_same:  # the record's positions: only the moved ones while it is st's
             own = snapshot.stamp_of(res.data) == st.stamp
             st.stamp = snapshot.write_positions(res.data, inp, moved if own else None)
@@ -305,6 +307,28 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
         # rebuilt when the drag pauses (handlers.settle) or Edit Mode is left
         return SyncResult("updated", rebind=settings["rest"] == "follow")
     return None
+
+
+def as_stored(points: np.ndarray) -> np.ndarray:
+    """The output points as the result mesh stores them (float32; beyond its range: inf)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return points.astype(np.float32)
+
+
+def not_finite_message(points: np.ndarray, points32: np.ndarray) -> str:
+    """"" when every output point is finite as stored (float32), else the error: a NaN or
+    infinity of the core (an internal error), or a finite surface beyond float32's range
+    (a mesh of huge coordinates, e.g. scaled to 3e38: its surface overshoots them)."""
+    bad = np.flatnonzero(~np.all(np.isfinite(points32), axis=1))
+    if not len(bad):
+        return ""
+    if np.all(np.isfinite(points[bad])):
+        why = (f": its coordinates exceed the single precision Blender stores (about "
+               f"{float(np.finfo(np.float32).max):.1e}); scale the mesh down")
+        return (f"{PREFIX}the surface is not finite at {len(bad)} output points (first "
+                f"{bad[:5].tolist()}){why}; base mesh left as is")
+    return (f"{PREFIX}internal error: the surface is not finite at {len(bad)} output points "
+            f"(first {bad[:5].tolist()}); base mesh left as is")
 
 
 def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
@@ -325,11 +349,10 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
         return _fail(obj, mod, key, st, format_error(exc), progress, render=render)
     progress(0.8, "writing result mesh")
     P = built.points
-    if not np.all(np.isfinite(P)):
-        bad = np.flatnonzero(~np.all(np.isfinite(P), axis=1))
-        return _fail(obj, mod, key, st, (
-            f"{PREFIX}internal error: the surface is not finite at {len(bad)} output points "
-            f"(first {bad[:5].tolist()}); base mesh left as is"), progress, render=render)
+    P32 = as_stored(P)
+    message = not_finite_message(P, P32)
+    if message:
+        return _fail(obj, mod, key, st, message, progress, render=render)
     prev = _states.get(key)
     previous = prev.transfer if prev is not None and prev.result_uid == st.result_uid else None
     st.transfer = write_geometry(res.data, built, previous, inp)
@@ -339,7 +362,7 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
             f"{PREFIX}resolution {resolution} gives fewer output {misfit} than the mesh has "
             f"(loose or merged ones); raise the resolution"), progress, render=render)
     st.stencil, st.points, st.warnings = built.stencil, P, built.surface.warnings
-    st.points32 = P.astype(np.float32)  # what write_geometry wrote
+    st.points32 = P32  # what write_geometry wrote
     for warning in st.warnings:
         log.warning("GERBS: %s: %s", obj.name, warning.message)
     st.record = gn.settings_record(settings, resolution)

@@ -96,3 +96,54 @@ def test_a_result_mesh_another_object_uses_is_not_written(blender):
     assert gn.get_result(mod).data != kept.data
     assert np.abs(P - K).max() > 0.01  # the cube shows its new surface
 
+
+# --- a surface beyond float32 --------------------------------------------------------
+
+def _all_finite(P) -> bool:
+    return bool(np.all(np.isfinite(P)))
+
+
+def test_a_surface_beyond_float32_is_an_error_and_never_applied(blender):
+    """Cube corners at +-3e38 (finite float32): its rounder surface overshoots float32's
+    range. The build is refused with the "surface is not finite" error, the base mesh passes
+    through, and Apply refuses (before: 54 infinite points shown, applied into the mesh)."""
+    import mathutils
+
+    from blender_addon import api
+
+    bpy.ops.mesh.primitive_cube_add()
+    cube = bpy.context.active_object
+    cube.data.transform(mathutils.Matrix.Scale(3e38, 4))
+    cube.data.update()
+    X = base_positions(cube)
+    with pytest.raises(api.GERBSSyncError, match="surface is not finite.*single precision"):
+        api.add_surface(cube, resolution=4)
+    P = evaluated(cube)
+    assert np.array_equal(P, X) and _all_finite(P)
+    assert "not finite" in api.status(cube)["error"]
+    with pytest.raises(api.GERBSSyncError, match="not finite"):
+        api.apply(cube)
+    assert len(cube.modifiers) == 1 and np.array_equal(base_positions(cube), X)
+
+
+def test_a_bound_surface_moved_beyond_float32_never_shows_infinite_points(blender):
+    """Rest Shape Bound updates linearly (the whole product, or only the moved vertices'
+    columns): an edit that takes the surface beyond float32 never writes inf."""
+    import mathutils
+
+    from blender_addon import api
+
+    cube, _ = _cube_with_surface(resolution=4, rest="bound")
+    cube.data.transform(mathutils.Matrix.Scale(3e38, 4))  # the whole product
+    cube.data.update()
+    P = evaluated(cube)
+    assert _all_finite(P) and np.array_equal(P, base_positions(cube))
+    assert "not finite" in api.status(cube)["error"]
+
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=10, y_subdivisions=10, size=2)
+    grid = bpy.context.active_object
+    api.add_surface(grid, resolution=3, rest="bound")
+    for i in (44, 45, 54, 55):  # 4 of 121 vertices: a partial update
+        grid.data.vertices[i].co.z = 3.39e38
+    grid.data.update()
+    assert _all_finite(evaluated(grid))
