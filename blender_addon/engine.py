@@ -56,7 +56,7 @@ import numpy as np
 
 from . import creases as creases_mod
 from . import geometry_nodes as gn
-from . import finite, mesh_io, results, snapshot, stack
+from . import finite, linked, mesh_io, results, snapshot, stack
 from . import settings as settings_mod
 from .build import build_surface, write_carried, write_geometry
 from .errors import PREFIX, format_error, format_warnings
@@ -82,14 +82,17 @@ def clear_caches() -> None:
 
 
 def set_error(obj, mod, message: str, warning: str = "") -> None:
-    """The modifier's error line and its warning line (what a build repaired)."""
+    """The modifier's error line and its warning line (what a build repaired); never on a
+    linked object (read-only: its state holds the message)."""
+    if linked.is_linked(obj):
+        return
     if gn.set_error(mod, message) | gn.set_warning(mod, "" if message else warning):
         obj.update_tag()  # re-evaluate: the Switch node shows the base mesh or the surface
 
 
 def set_render_error(obj, mod, message: str) -> None:
     """The modifier's Render Error: while set, final renders show its input."""
-    if gn.set_render_error(mod, message):
+    if not linked.is_linked(obj) and gn.set_render_error(mod, message):
         obj.update_tag()  # re-evaluate: the render's Switch shows the input or the surface
 
 
@@ -151,9 +154,30 @@ def sync(obj, mod, depsgraph, *, force: bool = False, progress=None) -> SyncResu
             return SyncResult("error", message)
         obj.update_tag()
         return SyncResult("unchanged", retry=True)
-    result = _sync(obj, mod, depsgraph, force, progress or silent)
+    if linked.is_linked(obj):  # library data: read-only (linked.py)
+        result = _sync_linked(obj, mod, depsgraph)
+    else:
+        result = _sync(obj, mod, depsgraph, force, progress or silent)
     stats[result.status] += 1
     return result
+
+
+def _sync_linked(obj, mod, depsgraph) -> SyncResult:
+    """A linked object: nothing is built or written; the state says why the base mesh
+    shows (api.status), if it does."""
+    from .errors import GERBSValueError
+
+    key = state_key(obj, mod, depsgraph.mode == "RENDER")
+    try:
+        settings = gn.read_settings(_evaluated_modifier(obj, mod, depsgraph))
+        message = linked.check(obj, mod, depsgraph, settings["use_normals"])
+    except GERBSValueError as exc:
+        message = format_error(exc)
+    if not message:
+        _states.pop(key, None)
+        return SyncResult("unchanged")
+    _states[key] = SurfaceState(settings=(), input=None, positions=None, error=message)
+    return SyncResult("error", message)
 
 
 def _evaluated_modifier(obj, mod, depsgraph):

@@ -36,7 +36,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import engine, ids, results
+from . import engine, ids, linked, results
 from . import geometry_nodes as gn
 from .errors import PREFIX
 from .progress import Progress
@@ -295,6 +295,8 @@ def _render_sync(objects, depsgraph) -> None:
 
 def _upgrade_all() -> None:
     for obj in engine.gerbs_objects():
+        if linked.is_linked(obj):  # read-only: its sync says why it cannot update
+            continue
         for mod in gn.gerbs_modifiers(obj):
             if gn.upgrade(mod):
                 log.info("GERBS: %s: modifier %r moved to node group version %d",
