@@ -57,6 +57,7 @@ import numpy as np
 from . import creases as creases_mod
 from . import geometry_nodes as gn
 from . import finite, linked, mesh_io, results, snapshot, stack
+from . import rest as rest_mod
 from . import settings as settings_mod
 from .build import build_surface, write_carried, write_geometry
 from .errors import PREFIX, format_error, format_warnings
@@ -288,8 +289,9 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     _copy_materials(obj.data, res.data)
     outcome = _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0)
     if outcome is None:
-        outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz), progress, t0,
-                           render)
+        bound = _rest_shape(mod, res, shown, (st, view), inp, settings, force, render)
+        outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz, bound),
+                           progress, t0, render)
     return SyncResult(outcome.status, outcome.message, outcome.rebind, retry) if retry else outcome
 
 
@@ -355,16 +357,27 @@ def not_finite_message(points: np.ndarray, points32: np.ndarray) -> str:
             f"(first {bad[:5].tolist()}); base mesh left as is")
 
 
+def _rest_shape(mod, res, shown, states, inp, settings, force, render):
+    """The rest shape a build keeps (Rest Shape Bound: rest.py), or None: bind the current
+    positions (a Rebuild, Follow, a new topology, none kept)."""
+    if force or settings["rest"] != "bound":
+        return None
+    results = (shown, res) + ((gn.get_result(mod),) if render else ())
+    return rest_mod.kept(inp, states, results)
+
+
 def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
-    """A full build at ``build = (resolution, creases)`` into result `res`."""
-    resolution, crz = build
+    """A full build at ``build = (resolution, creases, rest shape or None)`` into result
+    `res`."""
+    resolution, crz, bound = build
     from .errors import GERBSError, InvalidMeshError
 
     key = state_key(obj, mod, render)
     X = inp.positions.astype(np.float64)
-    st = SurfaceState(settings=skey, input=inp, positions=X, rest=X, result_uid=res.session_uid)
+    st = SurfaceState(settings=skey, input=inp, positions=X, rest=X if bound is None else bound,
+                      result_uid=res.session_uid)
     try:
-        built = build_surface(settings, inp, resolution, progress, crz)
+        built = build_surface(settings, inp, resolution, progress, crz, rest=bound)
     except GERBSError as exc:
         return _fail(obj, mod, key, st, format_error(exc), progress,
                      problem=exc if isinstance(exc, InvalidMeshError) else None, render=render)
@@ -380,6 +393,7 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
     prev = _states.get(key)
     previous = prev.transfer if prev is not None and prev.result_uid == st.result_uid else None
     st.transfer = write_geometry(res.data, built, previous, inp)
+    rest_mod.write(res.data, st.rest if settings["rest"] == "bound" else None)  # kept with it
     misfit = snapshot.misfit(res.data, inp)
     if misfit:  # the record of the input must fit on the output
         return _fail(obj, mod, key, st, (
