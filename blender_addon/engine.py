@@ -64,7 +64,7 @@ from .errors import PREFIX, format_error, format_warnings
 from .progress import silent
 from .stencil_update import apply_stencil
 from .states import (  # noqa: F401  (engine.SurfaceState, engine.stats, ... for callers)
-    SurfaceState, SyncResult, get_state, known, prune, state_key, stats)
+    SurfaceState, SyncResult, get_state, gone, known, prune, state_key, stats)
 from .states import states as _states
 
 log = logging.getLogger(__name__)

@@ -147,3 +147,40 @@ def test_a_bound_surface_moved_beyond_float32_never_shows_infinite_points(blende
         grid.data.vertices[i].co.z = 3.39e38
     grid.data.update()
     assert _all_finite(evaluated(grid))
+
+
+# --- Blender's own Apply of a modifier that passes its input on --------------------------
+
+@pytest.mark.parametrize("why", ["invalid_mesh", "live_update_off", "convert"])
+def test_blenders_own_apply_of_a_pass_through_modifier_gives_the_mesh_back_as_it_was(blender,
+                                                                                     why):
+    """The pass-through carries the channel (.gerbs_in_*) for the add-on to read; Blender's
+    Apply / Convert to Mesh baked it into the user's mesh (before: .gerbs_in_face_size,
+    .gerbs_in_position, .gerbs_in_record_0/1 stayed, saved with the file)."""
+    from blender_addon import api
+
+    bpy.ops.mesh.primitive_cube_add()
+    cube = bpy.context.active_object
+    before = sorted(a.name for a in cube.data.attributes)
+    if why == "invalid_mesh":
+        cube.data.vertices[0].co.x = float("nan")
+        cube.data.update()
+        api.add_surface(cube, resolution=2, raise_errors=False)
+        assert "non_finite" in api.status(cube)["error"]
+    else:
+        api.add_surface(cube, resolution=2)
+        bpy.context.scene.gerbs.live_update = False
+        cube.data.vertices[0].co.z += 0.5
+        cube.data.update()
+    X = base_positions(cube)
+    P = evaluated(cube)
+    assert len(P) == 8 and np.array_equal(P, X, equal_nan=True)  # passed through
+    with bpy.context.temp_override(object=cube, active_object=cube, selected_objects=[cube]):
+        if why == "convert":
+            bpy.ops.object.convert(target="MESH")
+        else:
+            bpy.ops.object.modifier_apply(modifier=cube.modifiers[0].name)
+    bpy.context.view_layer.update()
+    assert len(cube.modifiers) == 0
+    assert sorted(a.name for a in cube.data.attributes) == before
+    assert np.array_equal(base_positions(cube), X, equal_nan=True)
