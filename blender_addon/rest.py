@@ -22,6 +22,12 @@ import numpy as np
 from . import ids, snapshot
 
 
+def _is_result(res) -> bool:
+    """Is `res` a GERBS result object with its result mesh (ids.RESULT_TAG on both)?"""
+    return (res is not None and res.type == "MESH" and bool(res.get(ids.RESULT_TAG))
+            and res.data is not None and bool(res.data.get(ids.RESULT_TAG)))
+
+
 def _was_bound(st) -> bool:
     return dict(st.settings).get("rest") == "bound"
 
@@ -67,7 +73,7 @@ def kept(inp, states, results) -> np.ndarray | None:
                 and _fits(inp, st.input.offsets, st.input.corners, len(st.rest))):
             return st.rest
     for res in results:
-        if res is not None and res.type == "MESH" and res.data is not None:
+        if _is_result(res):  # (a hidden input may point at the user's object: never read)
             rest = read(res.data, inp)
             if rest is not None:
                 return rest
