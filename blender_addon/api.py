@@ -22,15 +22,16 @@ Errors (all ``gerbs_core.errors.GERBSError``):
   :func:`add_surface`, :func:`update` and :func:`apply` when ``raise_errors``
   -- the modifier is kept and shows the message, the base mesh is untouched;
 * an object without the modifier (or not a mesh): :class:`NoModifierError`;
-* Apply refused by Blender (Edit Mode, a mesh used by several objects), or
-  :func:`add_surface` on an object that already has the modifier (one per object):
-  :class:`OperationError` (a RuntimeError); nothing is changed.
+* Apply refused by Blender (Edit Mode, a mesh used by several objects),
+  :func:`add_surface` on an object that already has the modifier (one per object), or
+  a change (add, settings, apply, remove) of an object linked from a library (read-only:
+  linked.py): :class:`OperationError` (a RuntimeError); nothing is changed.
 """
 from __future__ import annotations
 
 import bpy
 
-from . import engine, handlers, ids
+from . import engine, handlers, ids, linked
 from . import geometry_nodes as gn
 from . import settings as settings_mod
 from .errors import GERBSSyncError, NoModifierError, OperationError, operator_message
@@ -51,6 +52,13 @@ def _modifier(obj, mod=None):
     if mod is None:
         raise NoModifierError(f"{obj.name!r} has no {ids.MODIFIER_NAME} modifier")
     return mod
+
+
+def _local(obj, what: str):
+    """`obj`, unless it is linked from a library (read-only: linked.py)."""
+    if linked.is_linked(obj):
+        raise OperationError(linked.refusal(obj, what))
+    return obj
 
 
 def _raise_if_error(outcome, raise_errors: bool) -> None:
@@ -75,7 +83,7 @@ def add_surface(obj, *, progress=None, raise_errors: bool = True, **settings):
     mesh is invalid (the modifier stays, showing the error). Without
     ``render_resolution`` renders use ``resolution``.
     """
-    _mesh_object(obj)
+    _local(_mesh_object(obj), "add the modifier to")
     if "resolution" in settings and "render_resolution" not in settings:
         settings = {**settings, "render_resolution": settings["resolution"]}
     values = settings_mod.validate({**ids.DEFAULTS, **settings})
@@ -97,7 +105,9 @@ def set_settings(obj, mod=None, **settings) -> None:
     """Change settings of `obj`'s GERBS modifier (validated first: a bad value
     raises InvalidParameterError and changes nothing); the surface follows on
     the next depsgraph update."""
-    gn.write_settings(_modifier(obj, mod), **settings)
+    mod = _modifier(obj, mod)
+    _local(obj, "change the settings of")
+    gn.write_settings(mod, **settings)
     obj.update_tag()
 
 
@@ -117,6 +127,7 @@ def update(obj, *, force: bool = False, progress=None, raise_errors: bool = True
 def apply(obj, mod=None) -> None:
     """Bake the current surface into ``obj.data`` (like Apply in the modifier panel)."""
     mod = _modifier(obj, mod)
+    _local(obj, "apply the modifier of")
     if obj.mode != "OBJECT":
         raise OperationError(f"{obj.name!r}: apply needs Object Mode")
     if obj.data.users > 1:
@@ -142,6 +153,7 @@ def remove(obj, mod=None) -> None:
     mod = mod or get_modifier(obj)
     if mod is None:
         return
+    _local(obj, "remove the modifier of")
     obj.modifiers.remove(mod)
     obj.update_tag()
     handlers.collect_now()
@@ -154,7 +166,10 @@ def status(obj, mod=None) -> dict:
     the input meanwhile)."""
     mod = _modifier(obj, mod)
     st = engine.get_state(obj, mod)
-    out = {"error": gn.get_error(mod), "warning": gn.get_warning(mod),
+    error = gn.get_error(mod)
+    if not error and st is not None and linked.is_linked(obj):  # not on the linked modifier
+        error = st.error
+    out = {"error": error, "warning": gn.get_warning(mod),
            "render_error": gn.get_render_error(mod)}
     if st is not None and not st.error:
         out.update(points=st.n_points, faces=st.n_faces, triangles=st.n_triangles,

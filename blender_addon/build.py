@@ -43,9 +43,11 @@ class Built:
     surface: object  # the BlendingSurface (its repair maps output elements to the input's)
 
 
-def build_surface(settings: dict, inp, resolution: int, progress, creases=None) -> Built:
+def build_surface(settings: dict, inp, resolution: int, progress, creases=None,
+                  rest=None) -> Built:
     """The surface of `inp` with `settings` at `resolution` (raises GERBSError);
-    `creases`: :class:`blender_addon.creases.Creases` (None: none)."""
+    `creases`: :class:`blender_addon.creases.Creases` (None: none); `rest`: (V, 3) the rest
+    shape it is bound to (Rest Shape Bound, rest.py; None: `inp`'s positions)."""
     from .core import module, scipy_problem
     from .errors import MissingDependencyError
 
@@ -59,7 +61,8 @@ def build_surface(settings: dict, inp, resolution: int, progress, creases=None) 
     progress(0.05, "building surface")
     crease_args = creases.core_arguments() if creases is not None else {}
     surface = BlendingSurface(X, inp.faces(), kernel=args.kernel, normals=normals,
-                              **args.surface, **crease_args)  # creases: creases.py
+                              rest_positions=rest, **args.surface,
+                              **crease_args)  # creases: creases.py
     if normals is not None:  # Hermite normals: not W @ X (the core refuses a stencil)
         progress(0.35, "evaluating surface")
         P = surface.tessellate(resolution)[0]

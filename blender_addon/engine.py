@@ -56,14 +56,15 @@ import numpy as np
 
 from . import creases as creases_mod
 from . import geometry_nodes as gn
-from . import finite, mesh_io, results, snapshot, stack
+from . import finite, linked, mesh_io, results, snapshot, stack
+from . import rest as rest_mod
 from . import settings as settings_mod
 from .build import build_surface, write_carried, write_geometry
 from .errors import PREFIX, format_error, format_warnings
 from .progress import silent
 from .stencil_update import apply_stencil
 from .states import (  # noqa: F401  (engine.SurfaceState, engine.stats, ... for callers)
-    SurfaceState, SyncResult, get_state, known, prune, state_key, stats)
+    SurfaceState, SyncResult, get_state, gone, known, prune, state_key, stats)
 from .states import states as _states
 
 log = logging.getLogger(__name__)
@@ -82,14 +83,17 @@ def clear_caches() -> None:
 
 
 def set_error(obj, mod, message: str, warning: str = "") -> None:
-    """The modifier's error line and its warning line (what a build repaired)."""
+    """The modifier's error line and its warning line (what a build repaired); never on a
+    linked object (read-only: its state holds the message)."""
+    if linked.is_linked(obj):
+        return
     if gn.set_error(mod, message) | gn.set_warning(mod, "" if message else warning):
         obj.update_tag()  # re-evaluate: the Switch node shows the base mesh or the surface
 
 
 def set_render_error(obj, mod, message: str) -> None:
     """The modifier's Render Error: while set, final renders show its input."""
-    if gn.set_render_error(mod, message):
+    if not linked.is_linked(obj) and gn.set_render_error(mod, message):
         obj.update_tag()  # re-evaluate: the render's Switch shows the input or the surface
 
 
@@ -151,9 +155,30 @@ def sync(obj, mod, depsgraph, *, force: bool = False, progress=None) -> SyncResu
             return SyncResult("error", message)
         obj.update_tag()
         return SyncResult("unchanged", retry=True)
-    result = _sync(obj, mod, depsgraph, force, progress or silent)
+    if linked.is_linked(obj):  # library data: read-only (linked.py)
+        result = _sync_linked(obj, mod, depsgraph)
+    else:
+        result = _sync(obj, mod, depsgraph, force, progress or silent)
     stats[result.status] += 1
     return result
+
+
+def _sync_linked(obj, mod, depsgraph) -> SyncResult:
+    """A linked object: nothing is built or written; the state says why the base mesh
+    shows (api.status), if it does."""
+    from .errors import GERBSValueError
+
+    key = state_key(obj, mod, depsgraph.mode == "RENDER")
+    try:
+        settings = gn.read_settings(_evaluated_modifier(obj, mod, depsgraph))
+        message = linked.check(obj, mod, depsgraph, settings["use_normals"])
+    except GERBSValueError as exc:
+        message = format_error(exc)
+    if not message:
+        _states.pop(key, None)
+        return SyncResult("unchanged")
+    _states[key] = SurfaceState(settings=(), input=None, positions=None, error=message)
+    return SyncResult("error", message)
 
 
 def _evaluated_modifier(obj, mod, depsgraph):
@@ -264,8 +289,9 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     _copy_materials(obj.data, res.data)
     outcome = _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0)
     if outcome is None:
-        outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz), progress, t0,
-                           render)
+        bound = _rest_shape(mod, res, shown, (st, view), inp, settings, force, render)
+        outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz, bound),
+                           progress, t0, render)
     return SyncResult(outcome.status, outcome.message, outcome.rebind, retry) if retry else outcome
 
 
@@ -293,6 +319,8 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
             and len(res.data.vertices) == st.n_points and np.all(np.isfinite(inp.positions))):
         X = inp.positions.astype(np.float64)
         points, moved = apply_stencil(st, X)
+        if points is None:  # beyond float32: a rebuild reports it (not_finite_message)
+            return None
         if carried_same:  # the record's positions: only the moved ones while it is st's
             own = snapshot.stamp_of(res.data) == st.stamp
             st.stamp = snapshot.write_positions(res.data, inp, moved if own else None)
@@ -307,16 +335,49 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
     return None
 
 
+def as_stored(points: np.ndarray) -> np.ndarray:
+    """The output points as the result mesh stores them (float32; beyond its range: inf)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return points.astype(np.float32)
+
+
+def not_finite_message(points: np.ndarray, points32: np.ndarray) -> str:
+    """"" when every output point is finite as stored (float32), else the error: a NaN or
+    infinity of the core (an internal error), or a finite surface beyond float32's range
+    (a mesh of huge coordinates, e.g. scaled to 3e38: its surface overshoots them)."""
+    bad = np.flatnonzero(~np.all(np.isfinite(points32), axis=1))
+    if not len(bad):
+        return ""
+    if np.all(np.isfinite(points[bad])):
+        why = (f": its coordinates exceed the single precision Blender stores (about "
+               f"{float(np.finfo(np.float32).max):.1e}); scale the mesh down")
+        return (f"{PREFIX}the surface is not finite at {len(bad)} output points (first "
+                f"{bad[:5].tolist()}){why}; base mesh left as is")
+    return (f"{PREFIX}internal error: the surface is not finite at {len(bad)} output points "
+            f"(first {bad[:5].tolist()}); base mesh left as is")
+
+
+def _rest_shape(mod, res, shown, states, inp, settings, force, render):
+    """The rest shape a build keeps (Rest Shape Bound: rest.py), or None: bind the current
+    positions (a Rebuild, Follow, a new topology, none kept)."""
+    if force or settings["rest"] != "bound":
+        return None
+    results = (shown, res) + ((gn.get_result(mod),) if render else ())
+    return rest_mod.kept(inp, states, results)
+
+
 def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
-    """A full build at ``build = (resolution, creases)`` into result `res`."""
-    resolution, crz = build
+    """A full build at ``build = (resolution, creases, rest shape or None)`` into result
+    `res`."""
+    resolution, crz, bound = build
     from .errors import GERBSError, InvalidMeshError
 
     key = state_key(obj, mod, render)
     X = inp.positions.astype(np.float64)
-    st = SurfaceState(settings=skey, input=inp, positions=X, rest=X, result_uid=res.session_uid)
+    st = SurfaceState(settings=skey, input=inp, positions=X, rest=X if bound is None else bound,
+                      result_uid=res.session_uid)
     try:
-        built = build_surface(settings, inp, resolution, progress, crz)
+        built = build_surface(settings, inp, resolution, progress, crz, rest=bound)
     except GERBSError as exc:
         return _fail(obj, mod, key, st, format_error(exc), progress,
                      problem=exc if isinstance(exc, InvalidMeshError) else None, render=render)
@@ -325,21 +386,21 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
         return _fail(obj, mod, key, st, format_error(exc), progress, render=render)
     progress(0.8, "writing result mesh")
     P = built.points
-    if not np.all(np.isfinite(P)):
-        bad = np.flatnonzero(~np.all(np.isfinite(P), axis=1))
-        return _fail(obj, mod, key, st, (
-            f"{PREFIX}internal error: the surface is not finite at {len(bad)} output points "
-            f"(first {bad[:5].tolist()}); base mesh left as is"), progress, render=render)
+    P32 = as_stored(P)
+    message = not_finite_message(P, P32)
+    if message:
+        return _fail(obj, mod, key, st, message, progress, render=render)
     prev = _states.get(key)
     previous = prev.transfer if prev is not None and prev.result_uid == st.result_uid else None
     st.transfer = write_geometry(res.data, built, previous, inp)
+    rest_mod.write(res.data, st.rest if settings["rest"] == "bound" else None)  # kept with it
     misfit = snapshot.misfit(res.data, inp)
     if misfit:  # the record of the input must fit on the output
         return _fail(obj, mod, key, st, (
             f"{PREFIX}resolution {resolution} gives fewer output {misfit} than the mesh has "
             f"(loose or merged ones); raise the resolution"), progress, render=render)
     st.stencil, st.points, st.warnings = built.stencil, P, built.surface.warnings
-    st.points32 = P.astype(np.float32)  # what write_geometry wrote
+    st.points32 = P32  # what write_geometry wrote
     for warning in st.warnings:
         log.warning("GERBS: %s: %s", obj.name, warning.message)
     st.record = gn.settings_record(settings, resolution)

@@ -18,7 +18,8 @@ the drag goes on and rebuilt from the current mesh once the edits pause for
 ``SETTLE_SECONDS`` (:func:`settle`; interactive sessions only).
 
 Garbage (results of removed modifiers, meshes of result objects deleted by
-hand, the unused node group) is collected when a synced object lost its GERBS
+hand, the unused node group, the channel attributes Blender's own Apply baked into a
+mesh: leftovers.py) is collected when a synced object lost its GERBS
 modifier, a result was replaced, or a deletion happened (the update touches the
 scene and the number of objects, meshes or node groups changed).
 
@@ -36,7 +37,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import engine, ids, results
+from . import engine, ids, leftovers, linked, results
 from . import geometry_nodes as gn
 from .errors import PREFIX
 from .progress import Progress
@@ -168,6 +169,8 @@ def retry():
 def _collect() -> None:
     results.collect_garbage()
     alive = {engine.state_key(o, m) for o in engine.gerbs_objects() for m in gn.gerbs_modifiers(o)}
+    # a synced modifier gone (applied, converted or removed): what an Apply baked of it
+    leftovers.remove_channels(engine.gone(alive))
     engine.prune(alive)
     for key in [k for k in _errors if k[:2] not in alive]:  # (render keys with theirs)
         del _errors[key]
@@ -295,6 +298,8 @@ def _render_sync(objects, depsgraph) -> None:
 
 def _upgrade_all() -> None:
     for obj in engine.gerbs_objects():
+        if linked.is_linked(obj):  # read-only: its sync says why it cannot update
+            continue
         for mod in gn.gerbs_modifiers(obj):
             if gn.upgrade(mod):
                 log.info("GERBS: %s: modifier %r moved to node group version %d",

@@ -77,6 +77,8 @@ SNAPSHOT_ATTRIBUTES = (SNAP_POSITION, SNAP_NORMAL, SNAP_CORNER, SNAP_FACE_SIZE, 
 SNAP_SERIAL = ".gerbs_src_serial_"  # + k: POINT, INT, its first point: (session salt, write
 #                                    counter)[k] of the record write (snapshot.stamp); optional
 SERIAL_NAMES = tuple(f"{SNAP_SERIAL}{k}" for k in range(2))
+SNAP_REST = ".gerbs_src_rest"  # POINT, FLOAT_VECTOR: the rest shape a Rest Shape Bound surface
+#                                is bound to (first V points; rest.py); optional, not checked
 RECORD_STAMP = "gerbs_record"  # custom property on a result mesh: a new stamp with every
 #                                record write (snapshot.stamp; undo restores an old one)
 OUT_WEIGHT = ".gerbs_src_weight_"  # + i: POINT FLOAT, output weights of vertex-group layer i

@@ -289,7 +289,7 @@ def strip_record(t, geometry):
         t.link(geometry, remove.inputs["Geometry"])
         return remove.outputs[0]
     t.nodes.remove(remove)
-    for name in ids.record_names() + ids.SERIAL_NAMES:
+    for name in ids.record_names() + ids.SERIAL_NAMES + (ids.SNAP_REST,):
         remove = t.node("GeometryNodeRemoveAttribute")
         remove.inputs["Name"].default_value = name
         t.link(geometry, remove.inputs["Geometry"])

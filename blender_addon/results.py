@@ -39,12 +39,29 @@ def new_result_object(obj, render: bool = False):
     return res
 
 
+def is_own(obj, res) -> bool:
+    """May the sync write into `res`, the object `obj`'s modifier points at as its result?
+    Only into the add-on's own: a local mesh object tagged ``ids.RESULT_TAG`` whose mesh
+    is tagged too and used by it alone, neither `obj` nor `obj`'s mesh. Anything else --
+    an object or mesh the user's (a Remap Users, a script setting the hidden input, the
+    base object itself), a mesh another object uses too, library data (read-only) -- is
+    never written."""
+    if res is None or res.type != "MESH" or res == obj or not res.get(ids.RESULT_TAG):
+        return False
+    mesh = res.data
+    return (mesh is not None and bool(mesh.get(ids.RESULT_TAG)) and mesh != obj.data
+            and mesh.users == 1 and res.library is None and mesh.library is None)
+
+
 def ensure_result(obj, mod, key: tuple, alive, render: bool = False) -> tuple[object, object]:
     """``(result, shown)``: the modifier's hidden result object (`render`: its render
     result), and the result object it pointed at until now -- what the evaluation that
     led to this sync showed (`result` itself, unless it was replaced; None if none).
 
-    A new result is made if there is none, or if the result belongs to another
+    A new result is made if there is none, if the one pointed at is not the add-on's
+    own (:func:`is_own`: it is left as it is, and the modifier points at the new one;
+    safer than an error, which would leave the surface gone behind a hidden input the
+    user cannot see to repair), or if the result belongs to another
     live modifier (``alive(owner_key)``): the object was duplicated with its
     modifier (Shift+D, Alt+D, ``obj.copy()``), and both now point at one result.
     The copy then builds its own; until its first build it shows the original's
@@ -52,9 +69,15 @@ def ensure_result(obj, mod, key: tuple, alive, render: bool = False) -> tuple[ob
     `shown` is where the sync reads its input.
     """
     shown = res = gn.get_result(mod, render)
+    if res is not None and not is_own(obj, res):
+        log.warning("GERBS: %s: the modifier's hidden %s input pointed at %r, which is not "
+                    "a GERBS result of its own; that object is left unchanged and a new "
+                    "result is made", obj.name, "Render Result" if render else "Result",
+                    res.name)
+        res = None
     if res is not None:
         owner = _owners.get(res.session_uid)
-        if res.type != "MESH" or (owner is not None and owner != key and alive(owner)):
+        if owner is not None and owner != key and alive(owner):
             res = None
     if res is None:
         res = new_result_object(obj, render)

@@ -168,6 +168,23 @@ def _scalars(mesh, prefix: str, count: int, dtype) -> np.ndarray:
                      for k in range(count)], dtype=dtype)
 
 
+def record_topology(mesh) -> tuple | None:
+    """(offsets (F+1,) int64, corners (C,) int32) of the input the record on `mesh` was
+    written from, or None where it has no record (cheap: no layer, no position read)."""
+    attrs = mesh.attributes
+    names = [f"{ids.SNAP_COUNT}{k}" for k in range(3)] + [ids.SNAP_CORNER, ids.SNAP_FACE_SIZE]
+    if any(attrs.get(name) is None for name in names) or not len(mesh.vertices):
+        return None
+    n = _domain_sizes(mesh)
+    _, F, C = (int(c) for c in _scalars(mesh, ids.SNAP_COUNT, 3, np.int32))
+    if not (0 <= F <= n["FACE"] and 0 <= C <= n["CORNER"]):
+        return None
+    sizes = _get(attrs[ids.SNAP_FACE_SIZE].data, "value", n["FACE"], np.int32)[:F]
+    offsets = np.zeros(F + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    return offsets, _get(attrs[ids.SNAP_CORNER].data, "value", n["CORNER"], np.int32)[:C].copy()
+
+
 def read_record(mesh) -> np.ndarray | None:
     """The settings record (len(ids.RECORD_SETTINGS),) float32, or None."""
     if any(mesh.attributes.get(name) is None for name in ids.record_names()) \

@@ -65,6 +65,11 @@ def known(obj) -> bool:
     return any(key[0] == uid for key in states)
 
 
+def gone(alive_keys) -> set:
+    """Session uids of the objects with a state whose modifier is not in `alive_keys`."""
+    return {key[0] for key in states if key[:2] not in alive_keys}
+
+
 def prune(alive_keys) -> None:
     """Drop the states of modifiers that no longer exist (render states with them)."""
     for key in [k for k in states if k[:2] not in alive_keys]:

@@ -25,17 +25,24 @@ def apply_stencil(st, X: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     engine.SurfaceState, updated in place): the full product, or, when few vertices
     moved, ``points += the moved vertices' contribution`` (the same sums, regrouped;
     refreshed every ``_PARTIAL_REFRESH`` updates so round-off cannot accumulate) and
-    only the rows it reaches converted to float32."""
+    only the rows it reaches converted to float32. ``(None, None)`` when a point is not
+    finite as float32 (a surface beyond its range): nothing may be written then, and `st`
+    is spent (the caller rebuilds, which reports why)."""
     moved = moved_vertices(X, st.positions)
-    if (st.points is not None and st.points32 is not None
-            and st.partial_updates < _PARTIAL_REFRESH
-            and 0 < len(moved) <= _PARTIAL_MAX_SHARE * len(X)):
-        hit, _ = st.stencil.moved_columns(moved)
-        st.stencil.apply_moved(st.points, moved, X[moved] - st.positions[moved])
-        st.points32[hit] = st.points[hit]
-        st.partial_updates += 1
-        return st.points32, moved
-    st.points = st.stencil.apply(X)
-    st.points32 = st.points.astype(np.float32)
+    with np.errstate(over="ignore", invalid="ignore"):
+        if (st.points is not None and st.points32 is not None
+                and st.partial_updates < _PARTIAL_REFRESH
+                and 0 < len(moved) <= _PARTIAL_MAX_SHARE * len(X)):
+            hit, _ = st.stencil.moved_columns(moved)
+            st.stencil.apply_moved(st.points, moved, X[moved] - st.positions[moved])
+            st.points32[hit] = st.points[hit]
+            st.partial_updates += 1
+            if not np.all(np.isfinite(st.points32[hit])):
+                return None, None
+            return st.points32, moved
+        st.points = st.stencil.apply(X)
+        st.points32 = st.points.astype(np.float32)
     st.partial_updates = 0
+    if not np.all(np.isfinite(st.points32)):
+        return None, None
     return st.points32, None

@@ -44,7 +44,10 @@ Refused (InvalidMeshError), because no surface can come from them: ``bad_shape``
 ``empty`` (no faces, no vertices, or nothing left after stage 3), ``index_out_of_range``
 (a face naming a vertex that does not exist), ``non_finite`` (NaN or infinite
 coordinates, loose vertices included) and ``outlier_vertex`` (a vertex of a face 1e6
-median edge lengths from the rest: float64 cannot hold both scales).
+median edge lengths from the rest: float64 cannot hold both scales). A mesh that only
+``merge_distance`` empties (welding collapsed every face that would otherwise be left) is
+refused as that setting's error (InvalidParameterError naming ``merge_distance``), not as
+an empty mesh.
 """
 from __future__ import annotations
 
@@ -240,6 +243,17 @@ def _open_seams(G, vertex_map, sizes, flat, partner):
     return np.unique(vertex_map[pairs]), edges
 
 
+def _faces_without_merge(G, sizes0, flat0, rtol) -> bool:
+    """Would faces with an area be left without welding? (Only to say why a mesh came out
+    empty: the same stages as :func:`repair_mesh` with ``merge_distance=None``.)"""
+    rep = rf.weld_map(G, sizes0, flat0, None, rtol, [])
+    sizes, flat, origin = rf.clean_faces(sizes0, rep[flat0], np.arange(len(sizes0)), sizes0,
+                                         rf.input_repeats(sizes0, flat0), [])
+    if len(sizes):
+        sizes, flat, origin = rf.merge_zero_area(G, sizes, flat, origin, rtol, [])
+    return bool(len(sizes))
+
+
 def repair_mesh(vertices, faces, *, merge_distance=None, rest_positions=None,
                 rtol: float = 1e-12) -> RepairedMesh:
     """Repair a polygon mesh into an oriented 2-manifold with boundary (module docstring).
@@ -247,7 +261,8 @@ def repair_mesh(vertices, faces, *, merge_distance=None, rest_positions=None,
     vertices (V, 3) float; faces: int sequences, an (F, k) int array or a MeshTopology;
     merge_distance: None (off) or a distance >= 0 in the units of the vertices;
     rest_positions (V, 3): the shape the geometric tests use (default: vertices).
-    Raises InvalidMeshError for what no surface can come from; never modifies its input.
+    Raises InvalidMeshError for what no surface can come from, InvalidParameterError for a
+    merge_distance that collapses every face; never modifies its input.
     """
     X = np.asarray(vertices, dtype=np.float64)
     check_finite(X)
@@ -268,6 +283,11 @@ def repair_mesh(vertices, faces, *, merge_distance=None, rest_positions=None,
     if len(sizes):
         sizes, flat, origin = rf.merge_zero_area(G, sizes, flat, origin, rtol, notes)
     if not len(sizes):
+        if merge_distance is not None and _faces_without_merge(G, sizes0, flat0, rtol):
+            from ..errors import InvalidParameterError
+            raise InvalidParameterError("merge_distance", (
+                f"merging vertices closer than {merge_distance:g} collapsed every face; use a "
+                f"smaller merge_distance"))
         raise InvalidMeshError("empty", "empty: no face with 3 distinct vertices and an area "
                                "(every face is degenerate)", None, "face")
     new_flat, vmap, partner, flip = _topology_repairs(G, sizes, flat, notes)

@@ -202,6 +202,10 @@ def test_merge_distance_welds_only_when_asked(blender, tmp_path):
 
 
 NO_FACES = "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n"  # edges only: no surface
+# a cube with corners at +-3e38 (finite float32): its surface overshoots float32's range
+HUGE_CUBE = "".join(f"v {x} {y} {z}\n" for x in (-3e38, 3e38) for y in (-3e38, 3e38)
+                    for z in (-3e38, 3e38)) + \
+    "f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n"
 
 
 @pytest.mark.parametrize("case,words", [
@@ -217,8 +221,9 @@ NO_FACES = "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n"  # edges only: no surface
     ("--resolution 0", ["--resolution", "[1, 64]"]), ("--bfbs-left 99", ["--bfbs-left", "[0, 16]"]),
     ("--resolution x", ["invalid int value"]), ("--alpha nan", ["--alpha", "finite"]),
     ("--memory-budget 0", ["--memory-budget"]), ("--merge-distance -1", ["--merge-distance"]),
+    ("--merge-distance 0.5", ["merge_distance", "closer than 0.5 collapsed every face"]),
     ("--kernel gauss", ["--kernel"]), ("no faces", ["empty"]),
-    ("too large", ["memory"]),
+    ("too large", ["memory"]), ("beyond float32", ["surface is not finite", "scale"]),
     ("missing folder", ["its folder", "does not exist", "create it first"]),
 ])
 def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, case, words):
@@ -250,6 +255,8 @@ def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, 
         args += case.split()
     elif case == "no faces":
         good.write_text(NO_FACES)
+    elif case == "beyond float32":
+        good.write_text(HUGE_CUBE)
     elif case == "too large":
         args += ["--resolution", "64", "--memory-budget", "1"]
     elif case == "missing folder":

@@ -115,6 +115,24 @@ def test_bad_settings_are_refused(blender):
     assert len(obj.modifiers) == 0
 
 
+def test_a_merge_distance_that_collapses_every_face_names_the_setting(blender):
+    """Suzanne with Merge by Distance 0.5: the message says the merge distance did it, not
+    that the (valid) mesh is invalid; a smaller distance brings the surface back."""
+    from blender_addon import api, panels
+
+    obj = make_object("suzanne")
+    mod = api.add_surface(obj, resolution=2)
+    n_surface = len(evaluated(obj))
+    api.set_settings(obj, merge=True, merge_distance=0.5)
+    assert len(evaluated(obj)) == len(obj.data.vertices)  # the base mesh passes through
+    error = api.status(obj)["error"]
+    assert "merge_distance" in error and "closer than 0.5 collapsed every face" in error
+    assert "invalid mesh" not in error and "degenerate" not in error
+    assert "merge_distance" in " ".join(panels.panel_rows(obj, mod)["error"])
+    api.set_settings(obj, merge_distance=1e-4)
+    assert len(evaluated(obj)) == n_surface and api.status(obj)["error"] == ""
+
+
 def test_too_large_resolution_is_an_error_not_a_crash(blender):
     from blender_addon import api
     from blender_addon.api import GERBSSyncError

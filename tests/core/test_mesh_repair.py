@@ -346,6 +346,25 @@ def test_what_no_surface_can_come_from_is_still_refused():
         BlendingSurface(V, F, merge_distance=-1.0)
 
 
+def test_a_merge_distance_that_collapses_every_face_is_named_as_the_cause():
+    """Welding everything into a point is the setting's error, not an "empty" mesh (before:
+    "empty: no face with 3 distinct vertices and an area", the valid mesh blamed)."""
+    from gerbs_core.errors import InvalidParameterError
+
+    V, F = _wavy_grid(3)
+    span = float(np.ptp(V, axis=0).max())
+    with pytest.raises(InvalidParameterError) as e:
+        repair_mesh(V, F, merge_distance=2 * span)
+    assert e.value.name == "merge_distance" and not isinstance(e.value, InvalidMeshError)
+    assert f"closer than {2 * span:g} collapsed every face" in str(e.value)
+    assert "smaller merge_distance" in str(e.value)
+    # a mesh that is empty without any merging stays an empty mesh
+    for distance in (None, 2 * span):
+        with pytest.raises(InvalidMeshError) as e:
+            repair_mesh(V, [(0, 1), (2, 2, 2), (0, 1, 0)], merge_distance=distance)
+        assert e.value.problem == "empty"
+
+
 def test_repair_never_modifies_its_input_and_is_the_identity_on_valid_meshes():
     V, F = _wavy_grid(3)
     arr = np.array(F)
