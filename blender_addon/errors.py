@@ -50,15 +50,20 @@ def format_error(exc: Exception) -> str:
 
 
 def format_warnings(warnings) -> str:
-    """One line summing up the repairs of a build (gerbs_core.mesh.repair.MeshWarning
-    records): tag, count and first indices of each; "" when there are none."""
+    """One line summing up the warnings of a build (gerbs_core.mesh.repair.MeshWarning
+    records): tag, count and first indices of each repair, the message of a warning that
+    names no element; "" when there are none."""
     if not warnings:
         return ""
     plural = {"vertex": "vertices", "face": "faces"}
     parts = [f"{w.tag} ({len(w.indices)} "
              f"{plural.get(w.element, w.element) if len(w.indices) > 1 else w.element} "
-             f"{list(w.indices[:5])}{' ...' if len(w.indices) > 5 else ''})" for w in warnings]
-    return f"{PREFIX}mesh repaired: " + "; ".join(parts)
+             f"{list(w.indices[:5])}{' ...' if len(w.indices) > 5 else ''})"
+             for w in warnings if w.indices]
+    # a warning naming no element (the core's fairing_skipped) is its own message
+    said = (["mesh repaired: " + "; ".join(parts)] if parts else []) + \
+        [w.message for w in warnings if not w.indices]
+    return PREFIX + "; ".join(said)
 
 
 def operator_message(exc: Exception) -> str:

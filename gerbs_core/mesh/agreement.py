@@ -97,16 +97,28 @@ class FairnessRule:
     # everywhere grows the Cube to 1.48x (docs/design.md "Folds", sharp_mu)
     spread_mu: float = 1.5
     spread_mu_from: float = 70.0
+    # the fairing (mesh.fairing): the largest angle (degrees) between neighbouring triangles
+    # of the lattice at turn_resolution before the coefficients are corrected (180: off),
+    # the correction's weight per coefficient (dimensionless), L-BFGS's iterations per
+    # round, the highest degree of a corrected monomial
+    turn: float = 35.0
+    turn_resolution: int = 8
+    turn_weight: float = 0.03
+    turn_iterations: int = 40
+    turn_degree: int = 4
+    # only faces having a corner whose cage star spreads above this (degrees) are looked
+    # at (smooth fine meshes: no lattice is made)
+    turn_spread: float = 20.0
 
     def __post_init__(self):
         from ..errors import InvalidParameterError
-        for name in ("mu", "lam", "fold", "spread_mu"):
+        for name in ("mu", "lam", "fold", "spread_mu", "turn_weight"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
                 raise InvalidParameterError(name, f"must be finite and >= 0, got {v!r}")
         if not (np.isfinite(self.fold_cos) and -1 <= self.fold_cos <= 1):
             raise InvalidParameterError("fold_cos", f"must be in [-1, 1], got {self.fold_cos!r}")
-        for name in ("spread", "spread_mu_from"):
+        for name in ("spread", "spread_mu_from", "turn", "turn_spread"):
             v = getattr(self, name)
             if not (np.isfinite(v) and 0 <= v <= 180):
                 raise InvalidParameterError(name, f"must be in [0, 180], got {v!r}")
@@ -114,11 +126,15 @@ class FairnessRule:
             raise InvalidParameterError("sharp_from", "need 0 <= sharp_from < sharp_to <= 180")
         if not (0 < self.damping <= 1):
             raise InvalidParameterError("damping", f"must be in (0, 1], got {self.damping!r}")
-        for name in ("sweeps", "choice_rounds"):
+        for name in ("sweeps", "choice_rounds", "turn_iterations"):
             if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 0:
                 raise InvalidParameterError(name, "must be an integer >= 0")
-        if int(self.resolution) != self.resolution or self.resolution < 2:
-            raise InvalidParameterError("resolution", "must be an integer >= 2")
+        if int(self.turn_degree) != self.turn_degree or not 1 <= self.turn_degree <= DMAX:
+            raise InvalidParameterError("turn_degree", f"must be an integer in [1, {DMAX}]")
+        for name in ("resolution", "turn_resolution"):
+            v = getattr(self, name)
+            if int(v) != v or v < 2:
+                raise InvalidParameterError(name, "must be an integer >= 2")
 
 
 def face_normals(topo, X) -> np.ndarray:

@@ -30,7 +30,8 @@ from .fits import pinned_normal_inverse
 from .monomials import monomial_exponents, n_monomials
 from .selection import selection_matrix
 
-__all__ = ["CoupledFits", "SelectedFits", "coupled_fits", "identity_fits", "LOCAL_REACH"]
+__all__ = ["CoupledFits", "SelectedFits", "coupled_fits", "identity_fits", "zero_row_sums",
+           "LOCAL_REACH"]
 
 # hops in the data-fit graph (each up to 2 rings) around moved vertices within which a
 # column of the map and all its intermediates lie, with a margin: data fit 1 hop, each
@@ -87,17 +88,9 @@ class CoupledFits:
     @cached_property
     def operator(self) -> sp.csr_matrix:
         """The explicit operator (V MMAX, V) (csr; rows summing to 0 exactly)."""
-        n = self.shape[0]
-        op = sp.csr_matrix(self._map(sp.identity(self.shape[1], format="csr")))
-        # constants have zero coefficients (the pin carries them): make every row sum to 0
+        # constants have zero coefficients (the pin carries them): every row sums to 0
         # exactly, whatever the round-off of ill-conditioned fits (it would show as W @ 1 != 1)
-        rows = np.arange(n)
-        mmax = n // self.shape[1]
-        op = op - sp.csr_matrix((np.asarray(op.sum(axis=1)).ravel(), (rows, rows // mmax)),
-                                shape=op.shape)
-        op.sum_duplicates()
-        op.eliminate_zeros()
-        return op
+        return zero_row_sums(sp.csr_matrix(self._map(sp.identity(self.shape[1], format="csr"))))
 
     def columns(self, cols) -> sp.csc_matrix:
         """Columns ``cols`` (m,) of :attr:`operator` as a csc (V MMAX, m), without making
@@ -155,6 +148,20 @@ class CoupledFits:
     @property
     def operator_built(self) -> bool:
         return "operator" in self.__dict__
+
+
+def zero_row_sums(op) -> sp.csr_matrix:
+    """A coefficient operator (V MMAX, V) with each row's sum taken off at its own vertex's
+    column (row i belongs to vertex i // MMAX): rows summing to 0 (constants have zero
+    coefficients), canonical csr."""
+    op = sp.csr_matrix(op)
+    n = op.shape[0]
+    rows = np.arange(n)
+    op = op - sp.csr_matrix((np.asarray(op.sum(axis=1)).ravel(), (rows, rows // (n // op.shape[1]))),
+                            shape=op.shape)
+    op.sum_duplicates()
+    op.eliminate_zeros()
+    return op
 
 
 def _project(proj, c, Y):

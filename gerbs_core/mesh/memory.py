@@ -60,6 +60,10 @@ BUILD_BYTES_PER_N2 = 250
 # down to 1 MB in the add-on) does not refuse it: it may use the larger of the budget and
 # this (the default budget)
 BUILD_MIN_BUDGET = 2.0e9
+# the fairing (mesh.fairing) per point of its lattice: the values, the factor's columns of
+# the corrected coefficients and the optimiser's arrays (measured: Suzanne 2.6 kB a point
+# at peak over the build without it; the cow 1.2 kB), with a margin
+FAIRING_BYTES_PER_POINT = 4000
 
 
 def work_bytes(budget=None) -> float:
@@ -139,3 +143,9 @@ def check_build(face_sizes, budget: float, n_data: int = 0) -> None:
     raise ResourceLimitError(f"the surface build needs an estimated {est / 1e6:.0f} MB, over "
                              f"the limit {limit / 1e6:.0f} MB (memory_budget, at least "
                              f"{BUILD_MIN_BUDGET / 1e6:.0f} MB for the build){hint}")
+
+
+def fairing_estimate(n_points: int) -> int:
+    """Bytes the fairing (:mod:`gerbs_core.mesh.fairing`) adds at peak on a lattice of
+    ``n_points`` points (the faces it looks at)."""
+    return int(FAIRING_BYTES_PER_POINT * n_points)

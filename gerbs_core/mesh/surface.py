@@ -7,12 +7,14 @@ geometry checks -> face layouts with the rest edge lengths (:mod:`.layout`) ->
 vertex charts (:mod:`.charts`) -> the star cover of smooth size functions
 (:mod:`.cover`) -> data rings and candidate fits (:mod:`.rings`, :mod:`.fits`)
 -> the choice and coupling that make neighbouring local functions agree
-(:mod:`.agreement`) -> evaluation (:mod:`.evaluate`), tessellation
+(:mod:`.agreement`) -> the fairing that bounds how sharply the surface turns
+(:mod:`.fairing`) -> evaluation (:mod:`.evaluate`), tessellation
 (:mod:`.lattice`) and stencils (:mod:`.stencil`). docs/design.md describes the
 design and the measurements behind it.
 
-Exact: everything is closed form up to round-off, except the kernel's F
-(tabulated to ~1e-13, :mod:`gerbs_core.kernels`). Near every vertex Psi_v = 1,
+Exact: everything is closed form up to round-off, except the kernel's F (tabulated to
+~1e-13, :mod:`gerbs_core.kernels`) and the fairing's weights (where its optimiser stops,
+:mod:`.fairing`; the output is still exactly linear in X). Near every vertex Psi_v = 1,
 so S = l_v there and S(v) = X_v.
 """
 from __future__ import annotations
@@ -30,12 +32,14 @@ from .coupling import SelectedFits
 from .cover import require_cover, star_cover
 from .crease_surface import build_model, crease_input, first_occurrence, merge_tessellation
 from .evaluate import evaluate, partition_at
+from .fairing import FairedFits, FairingSkipped, ring1_pairs, turn_correction
 from .lattice import Lattice, output_counts
 from .lattice_templates import obtuse_flips
 from .layout import face_layouts
-from .memory import assembly_chunk, check_build, evaluation_chunk, memory_estimate
+from .memory import (BUILD_MIN_BUDGET, assembly_chunk, check_build, evaluation_chunk,
+                     fairing_estimate, memory_estimate)
 from .monomials import monomials
-from .repair import repair_mesh
+from .repair import MeshWarning, repair_mesh
 from .rings import data_rings
 from .stencil import Stencil
 from .surface_inputs import check_settings, face_points, points, positive, unit_normals
@@ -65,6 +69,7 @@ class SurfaceModel:
     fits: object
     boundary: str
     crease: object = None
+    fairing_points: int = 0     # the lattice points the fairing looked at (memory estimates)
 
     @property
     def operator(self):
@@ -74,6 +79,28 @@ class SurfaceModel:
     @property
     def max_degree(self) -> int:
         return int(self.degrees.max())
+
+
+def faired(model: SurfaceModel, rest, h, rule: FairnessRule, budget: float):
+    """(``model`` with its fits corrected where its surface turns too sharply on the rest
+    shape (:mod:`gerbs_core.mesh.fairing`), the same model where it nowhere does; a
+    ``fairing_skipped`` warning or None)."""
+    from dataclasses import replace
+
+    from .spread_fits import star_spread
+
+    try:
+        corr, points = turn_correction(model, rest, h, ring1_pairs(model.topology), rule,
+                                       star_spread(model.topology, rest), budget)
+    except FairingSkipped as skip:
+        return model, MeshWarning(
+            "fairing_skipped", f"the surface is not faired: the {skip.points} lattice points "
+            f"of its sharply turning faces would need about {fairing_estimate(skip.points) / 1e6:.0f} MB, "
+            f"over the build's limit (memory_budget, at least {BUILD_MIN_BUDGET / 1e6:.0f} MB)",
+            (), "face")
+    if corr is not None:
+        model = replace(model, fits=FairedFits(model.fits, corr))
+    return replace(model, fairing_points=points), None
 
 
 class BlendingSurface:
@@ -163,7 +190,10 @@ class BlendingSurface:
             check_build(topo.face_sizes, self.memory_budget, len(rings.ids))
             degrees, fits = fair_fits(topo, charts, layouts.corners, cover, rings, rest, fairness)
             degrees.flags.writeable = False
-            self.model = SurfaceModel(topo, layouts, charts, cover, degrees, fits, boundary)
+            model = SurfaceModel(topo, layouts, charts, cover, degrees, fits, boundary)
+            self.model, skipped = faired(model, rest, rings.h, fairness, self.memory_budget)
+            if skipped is not None:
+                self._warnings += (skipped,)
         else:
             parts = build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink,
                                 exact_gauge, self.memory_budget)

@@ -49,6 +49,9 @@ VARIANTS = {
     # the coupling's agreement as strong at spread stars as elsewhere (the default
     # until 2026-12-04; gerbs_core.mesh.agreement.row_mu)
     "no-spread-mu": {"fairness": gerbs_core.FairnessRule(spread_mu=1.0)},
+    # without the fairing of the surface's turns (gerbs_core.mesh.fairing; the default
+    # until 2026-12-06)
+    "no-fairing": {"fairness": gerbs_core.FairnessRule(turn=180.0)},
 }
 
 

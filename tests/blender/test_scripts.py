@@ -50,6 +50,10 @@ def test_main_job_obj_output_is_the_surface(blender, tmp_path):
     from gerbs_core.mesh.surface import BlendingSurface
     from gerbs_core.datasets.primitives import suzanne
     X, F = suzanne()
+    # the positions as Blender's OBJ importer stores them (float32): the fairing
+    # (gerbs_core.mesh.fairing) carries a 1e-8 change of the rest shape into ~2e-4 of the
+    # surface, so the reference is built from what the job read
+    X = X.astype(np.float32).astype(np.float64)
     P = BlendingSurface(X, F, boundary="straighten").tessellate(2)[0]
     Q = positions(obj.data)
     assert Q.shape == P.shape and np.abs(Q - P).max() <= 1e-5

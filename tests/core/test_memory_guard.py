@@ -216,7 +216,7 @@ def test_the_build_estimate_bounds_the_measured_build_peak(mesh):
     """gerbs_core.mesh.memory.build_estimate (faces and ring data) against the tracemalloc
     peak of the construction: an upper bound, and not a wild one (a 128-gon's build is
     dominated by its n^3 term: 191 MB measured)."""
-    from gerbs_core.mesh.memory import build_estimate
+    from gerbs_core.mesh.memory import build_estimate, fairing_estimate
     from gerbs_core.mesh.rings import data_rings
 
     X, faces = {"suzanne": primitives.suzanne(), "cylinder64": _cylinder(64),
@@ -224,7 +224,8 @@ def test_the_build_estimate_bounds_the_measured_build_peak(mesh):
     s, peak = _peak(lambda: BlendingSurface(X, faces))
     m = s.model
     est = build_estimate(m.topology.face_sizes,
-                         len(data_rings(m.topology, m.charts, m.layouts.corners).ids))
+                         len(data_rings(m.topology, m.charts, m.layouts.corners).ids)) \
+        + fairing_estimate(m.fairing_points)
     assert peak <= est <= 3.0 * peak, (peak, est)
 
 

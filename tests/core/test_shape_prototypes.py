@@ -57,8 +57,10 @@ def test_ridge_prototype_is_a_linear_map_that_changes_the_mouth(suzanne, monkeyp
     from gerbs_core.testing import dihedral_angles, edge_adjacency
     V, F = suzanne
     from gerbs_core import FairnessRule
+    # (as measured: without the fairing of mesh.fairing, which came later)
+    rule = FairnessRule(spread_mu=1.0, turn=180.0)
     with R.patched():
-        s = BlendingSurface(V, F, fairness=FairnessRule(spread_mu=1.0))
+        s = BlendingSurface(V, F, fairness=rule)
         active = R.OPTS["active"]
         P, T, _ = s.tessellate(4)
         st = s.stencil(4)
@@ -74,7 +76,7 @@ def test_ridge_prototype_is_a_linear_map_that_changes_the_mouth(suzanne, monkeyp
     ang = dihedral_angles(P8, T8, edge_adjacency(T8))
     assert (ang > 90).sum() == 0
     # the default at the same resolution still has them (the control)
-    D, TD, _ = BlendingSurface(V, F).tessellate(8)
+    D, TD, _ = BlendingSurface(V, F, fairness=rule).tessellate(8)
     TD = np.asarray(TD)
     assert (dihedral_angles(D, TD, edge_adjacency(TD)) > 90).sum() > 0
 
@@ -101,6 +103,10 @@ def test_sharp_mu_prototype_is_the_rule_mu_when_constant(suzanne, monkeypatch):
     S = importlib.import_module("shape.proto.sharp_mu")
     from shape import methods
     V, F = suzanne
+    # all without the fairing (mesh.fairing), which the prototype predates: its optimisation
+    # would carry the round-off of the equal constructions up to ~1e-4
+    import gerbs_core.mesh.surface as su
+    monkeypatch.setattr(su, "faired", lambda model, *args: (model, None))
     ref = methods.gerbs_samples(V, F, 2, exact=False,
                                 fairness=gerbs_core.FairnessRule(mu=450.0, spread_mu=1.0))
     const = S.variant_of(S.patched, mu_smooth=450.0, mu_sharp=450.0)(V, F, 2, exact=False)
