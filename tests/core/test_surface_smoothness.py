@@ -194,12 +194,12 @@ def test_finite_difference_jumps_below_1e5(name):
         # Suzanne's thin stars put h = 1e-3 where the 8-point stencils' truncation meets
         # their rounding (measured C2: 4.3e-4 at h = 2e-3, 1.4e-5 at 1e-3 without the
         # fairing of mesh.fairing, 1.9e-5 with it; 3.6e-5 at 5e-4 with and without, the
-        # rounding bound's): one step down the jump must fall within that step's limits,
-        # and the analytic jumps below 1e-9 (a kink stays at 1e-3 and above whatever h)
+        # rounding bound's): one step down the jump must fall within that step's limits
+        # (a kink stays at 1e-3 and above whatever h; test_smooth_across_spokes_analytic
+        # holds Suzanne's analytic jumps, 7e-12)
         w = fd_jumps(s, 5e-4)
         lim = (1e-5 + 4 * w[2], 1e-5 + 4 * w[3])
         print(f"  h=5e-4: C1 {w[0]:.2e} C2 {w[1]:.2e} (limits {lim[0]:.1e} {lim[1]:.1e})")
-        assert max(analytic_jumps(s)) <= 1e-9
     assert w[0] <= lim[0] and w[1] <= lim[1]
     if name in CURVED:
         k = fd_jumps(BlendingSurface(V, F, exact_gauge=True), 1e-3, ts=(0.25, 0.5, 0.75))
