@@ -160,55 +160,35 @@ class FairedFits:
 
 
 def _cross(a, b):
-    """Row-wise cross products of (n, 3) arrays (np.cross without its axis handling)."""
-    out = np.empty_like(a)
-    out[:, 0] = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
-    out[:, 1] = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
-    out[:, 2] = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    return out
+    """Cross products of the columns of (3, n) arrays (rows x, y, z)."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
 
 
-def _scatter(index, values, n):
-    """(n, 3) sums of the rows of values (k, 3) per index (k,)."""
-    return np.stack([np.bincount(index, values[:, j], minlength=n) for j in range(3)], axis=1)
+def _dots(a, b):
+    """Dot products (n,) of the columns of (3, n) arrays, summed as (x + z) + y (the order
+    of numpy's einsum over three, which the first implementation used)."""
+    return (a[0] * b[0] + a[2] * b[2]) + a[1] * b[1]
 
 
-def _normals(P, T):
-    """(unit normals (T, 3), (e1, e2) the edges from corner 0, |e1 x e2| (T,)) of triangles T."""
-    e1, e2 = P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]
+def _normals(x, t):
+    """(unit normals (3, m), (e1, e2) (3, m) the edges from corner 0, |e1 x e2| (m,)) of the
+    triangles t (3, m) (their corners' indices, one row per corner) of points x (3, N)."""
+    x0, x1, x2 = np.take(x, t, axis=1).transpose(1, 0, 2)      # (3, m) each
+    e1, e2 = x1 - x0, x2 - x0
     c = _cross(e1, e2)
-    ln = np.sqrt(np.einsum("ij,ij->i", c, c))
-    return c / np.maximum(ln, 1e-300)[:, None], (e1, e2), ln
+    ln = np.sqrt(_dots(c, c))
+    return c / np.maximum(ln, 1e-300), (e1, e2), ln
 
 
 def turn_penalty(P, T, A, B, cos0):
     """(sum over pairs of max(0, cos0 - n_A . n_B)^2, its gradient w.r.t. P (N, 3)) for
-    triangles T (n, 3) of points P (N, 3) and the pairs (A, B) of adjacent triangles."""
-    F, (idx, G) = _penalty_parts(P, T, A, B, cos0)
-    out = np.zeros_like(P)
-    out[idx] = G
-    return F, out
-
-
-def _penalty_parts(P, T, A, B, cos0):
-    """(the penalty of :func:`turn_penalty`, (points idx, gradient G (len(idx), 3) there)):
-    the gradient only over the pairs beyond the bound (the others add nothing)."""
-    n, (e1, e2), ln = _normals(P, T)
-    c = np.einsum("ij,ij->i", n[A], n[B])
-    on = np.flatnonzero(c < cos0)
-    if not len(on):
-        return 0.0, (np.zeros(0, np.int64), np.zeros((0, 3)))
-    r = cos0 - c[on]
-    tris, inv = np.unique(np.concatenate([A[on], B[on]]), return_inverse=True)
-    # dF/dn per triangle: -2 r n_B at A, -2 r n_A at B
-    gn = _scatter(inv, np.concatenate([-2.0 * r[:, None] * n[B[on]],
-                                       -2.0 * r[:, None] * n[A[on]]]), len(tris))
-    nt, a1, a2 = n[tris], e1[tris], e2[tris]
-    # through n = c / |c|: dF/dc = (gn - (gn . n) n) / |c|
-    gc = (gn - np.einsum("ij,ij->i", gn, nt)[:, None] * nt) / np.maximum(ln[tris], 1e-300)[:, None]
-    g1, g2 = _cross(a2, gc), _cross(gc, a1)   # c = e1 x e2, e1 = p1 - p0, e2 = p2 - p0
-    idx, at = np.unique(T[tris].T.ravel(), return_inverse=True)
-    return float(np.dot(r, r)), (idx, _scatter(at, np.concatenate([-(g1 + g2), g1, g2]), len(idx)))
+    triangles T (n, 3) of points P (N, 3) and the pairs (A, B) of adjacent triangles: the
+    penalty the fairing minimises (:class:`_Penalty` with the points as the unknowns)."""
+    P = np.asarray(P, dtype=np.float64)
+    pen = _Penalty(P, sp.identity(len(P), format="csr"), np.asarray(T), np.asarray(A),
+                   np.asarray(B), cos0)
+    return pen(np.zeros_like(P))
 
 
 def ring1_pairs(topo) -> tuple[np.ndarray, np.ndarray]:
@@ -314,8 +294,8 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     P0 = evaluate(model, X, c0.reshape(V, mmax, -1), face, x, 0)[0][0]
     A, B = triangle_pairs(T)
     cos0 = np.cos(np.radians(rule.turn))
-    n0 = _normals(P0, T)[0]
-    cosab = np.einsum("ij,ij->i", n0[A], n0[B])
+    n0 = _normals(np.ascontiguousarray(P0.T), np.ascontiguousarray(T.T))[0]
+    cosab = _dots(n0[:, A], n0[:, B])
     hot = (cosab < cos0) & (cand[tface[A]] | cand[tface[B]])
     if not hot.any():
         return None, len(pts)
@@ -408,24 +388,77 @@ def _fair_region(P, E, T, A, B, cos0, rule):
 
 
 class _Penalty:
-    """The turn penalty of pairs (A, B) of lattice triangles T as a function of the scaled
-    unknowns z (n, 3): points P0 + Es z on the points the pairs' triangles use."""
+    """The turn penalty sum over the pairs (A, B) of lattice triangles T (t, 3) of
+    max(0, cos0 - n_A . n_B)^2 as a function of the unknowns z (n, 3): points P0 (N, 3) +
+    Es (N, n) z. Only the triangles having a point that Es moves (a stored entry in its
+    row) are recomputed per call (the first m of the pairs' triangles, in this order); the
+    others keep their normals at z = 0. Coordinates are rows ((3, k) arrays)."""
 
     def __init__(self, P0, Es, T, A, B, cos0):
         tris, inv = np.unique(np.concatenate([A, B]), return_inverse=True)
         pts = np.unique(T[tris].ravel())
-        self.T = np.searchsorted(pts, T[tris])
-        self.A, self.B = inv[:len(A)], inv[len(A):]
-        self.P0, self.E = P0[pts], Es[pts]
+        Tl = np.searchsorted(pts, T[tris])                  # (t, 3) into pts
+        E = Es[pts]
+        mov = (np.diff(E.indptr) > 0)[Tl].any(axis=1)
+        order = np.concatenate([np.flatnonzero(mov), np.flatnonzero(~mov)])
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        self.A, self.B = rank[inv[:len(A)]], rank[inv[len(A):]]
+        self.m = m = int(mov.sum())
+        mp = np.unique(Tl[mov].ravel())                     # the moving triangles' points
+        self.t = np.ascontiguousarray(np.searchsorted(mp, Tl[mov]).T)    # (3, m) into mp
+        self.x0 = np.ascontiguousarray(P0[pts][mp].T)       # (3, len(mp))
+        self.E = E[mp]
+        # the normals (3, t): the moving triangles' rewritten per call, the others' fixed
+        self.N = np.empty((3, len(tris)))
+        self.N[:, m:] = _normals(np.ascontiguousarray(P0[pts].T),
+                                 np.ascontiguousarray(Tl[~mov].T))[0]
         self.cos0 = cos0
 
+    def _update(self, z):
+        """The moving triangles' (normals, (e1, e2), |e1 x e2|) at z, written into N too."""
+        zt = np.ascontiguousarray(np.asarray(z).T)
+        x = np.stack([self.x0[j] + self.E @ zt[j] for j in range(3)])
+        out = _normals(x, self.t)
+        self.N[:, :self.m] = out[0]
+        return out
+
     def cosines(self, z):
-        n = _normals(self.P0 + self.E @ z, self.T)[0]
-        return np.einsum("ij,ij->i", n[self.A], n[self.B])
+        """n_A . n_B (pairs,) at z."""
+        self._update(z)
+        return _dots(np.take(self.N, self.A, axis=1), np.take(self.N, self.B, axis=1))
 
     def __call__(self, z):
-        F, (idx, G) = _penalty_parts(self.P0 + self.E @ z, self.T, self.A, self.B, self.cos0)
-        return F, self.E[idx].T @ G
+        """(the penalty, its gradient (n, 3) w.r.t. z): the gradient over the pairs beyond
+        the bound only (the others add nothing)."""
+        n, (e1, e2), ln = self._update(z)
+        N, A, B = self.N, self.A, self.B
+        nA, nB = np.take(N, A, axis=1), np.take(N, B, axis=1)
+        c = _dots(nA, nB)
+        on = np.flatnonzero(c < self.cos0)
+        if not len(on):
+            return 0.0, np.zeros((self.E.shape[1], 3))
+        r = self.cos0 - c[on]
+        # dF/dn per triangle: -2 r n_B at A, -2 r n_A at B (summed in pair order)
+        ab = np.concatenate([A[on], B[on]])
+        w = np.concatenate([-2.0 * r * nB[:, on], -2.0 * r * nA[:, on]], axis=1)
+        hit = np.zeros(N.shape[1], bool)
+        hit[ab] = True
+        k = np.flatnonzero(hit[:self.m])                    # moving triangles touched
+        gn = np.stack([np.bincount(ab, w[j], minlength=N.shape[1])[k] for j in range(3)])
+        nk = np.take(n, k, axis=1)
+        # through n = c / |c|: dF/dc = (gn - (gn . n) n) / |c|
+        gc = (gn - _dots(gn, nk) * nk) / np.maximum(ln[k], 1e-300)
+        g1 = _cross(np.take(e2, k, axis=1), gc)   # c = e1 x e2, e_i = p_i - p0
+        g2 = _cross(gc, np.take(e1, k, axis=1))
+        # dF/dp per point (corner 0's terms, then corner 1's, 2's), then E^T over them
+        tk = np.take(self.t, k, axis=1).ravel()
+        g = np.concatenate([-(g1 + g2), g1, g2], axis=1)
+        hit = np.zeros(len(self.x0[0]), bool)
+        hit[tk] = True
+        p = np.flatnonzero(hit)
+        G = np.stack([np.bincount(tk, g[j], minlength=len(hit))[p] for j in range(3)], axis=1)
+        return float(np.dot(r, r)), self.E[p].T @ G
 
 
 def _offset_weights(target, D, owner, pair_vertex, pair_offset, V):
