@@ -281,7 +281,7 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     tface = np.asarray(lat.triangle_face)
     tsel = np.flatnonzero(sel[tface])
     Tall = np.asarray(lat.triangles)[tsel]
-    pts, T = np.unique(Tall, return_inverse=True)
+    pts, T = _compact(Tall.ravel(), lat.n_points)
     if fairing_estimate(len(pts)) > max(float(budget), BUILD_MIN_BUDGET):
         raise FairingSkipped(len(pts))
     T = T.reshape(-1, 3)
@@ -331,13 +331,22 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     region = np.full(V, -1)
     region[av] = connected_components(graph, directed=False)[1]
     row_region = region[rv]
+    # a point's region: that of its face's active corners (a face's corners are in one
+    # another's ring 1, so in one region); every pair having a point a region moves is
+    # in its penalty
+    fregion = np.full(topo.n_faces, -1)
+    fregion[cf[act[fv]]] = region[fv[act[fv]]]
+    label = np.where(np.diff(Es.indptr) > 0, fregion[face], -1)
+    G = int(region.max()) + 1
+    pairs, bounds = _region_pairs(label[T], A, B, G)
     Ec = Es.tocsc()
     P = P0.copy()
     z = np.zeros((len(rows), 3))
-    for g in range(int(region.max()) + 1):
+    for g in range(G):
         cols = np.flatnonzero(row_region == g)
         E = Ec[:, cols].tocsr()
-        zg = _fair_region(P, E, T, A, B, cos0, rule)
+        check = pairs[bounds[g]:bounds[g + 1]]
+        zg = _fair_region(P, E, T, A[check], B[check], cos0, rule)
         if zg is not None:
             P += E @ zg
             z[cols] = zg
@@ -356,16 +365,42 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     return TurnCorrection(rows[rep][keep], tv[keep], tu[keep], a[keep], (V * mmax, V)), len(pts)
 
 
+def _compact(ids, n):
+    """(the distinct values u of ids (k,) in [0, n), ascending; ids' ranks in u): np.unique
+    with return_inverse, by marks instead of a sort."""
+    mark = np.zeros(n, bool)
+    mark[ids] = True
+    u = np.flatnonzero(mark)
+    rank = np.empty(n, np.int64)
+    rank[u] = np.arange(len(u))
+    return u, rank[ids]
+
+
+def _region_pairs(labels, A, B, G):
+    """(pairs, bounds): the pairs (A, B) of triangles having a point of region g (labels
+    (t, 3) the regions of the triangles' points, -1 none) are pairs[bounds[g]:bounds[g+1]],
+    ascending."""
+    L = np.concatenate([labels[A], labels[B]], axis=1)          # (pairs, 6)
+    hi = L.max(axis=1)
+    lo = np.where(L >= 0, L, G).min(axis=1)
+    one = np.flatnonzero((hi >= 0) & (lo == hi))                # a single region (nearly all)
+    many = np.flatnonzero((hi >= 0) & (lo < hi))
+    sub = L[many].ravel()
+    at = np.repeat(many, L.shape[1])[sub >= 0]
+    n = len(A)
+    key = np.concatenate([hi[one] * n + one, np.unique(sub[sub >= 0] * n + at)])
+    key.sort()
+    return key % n, np.searchsorted(key // n, np.arange(G + 1))
+
+
 def _fair_region(P, E, T, A, B, cos0, rule):
     """The scaled corrections z (n, 3) of one region (module docstring) or None: E (N, n)
     the region's columns of the scaled factor on the lattice points, P (N, 3) the points
-    now; every pair (A, B) of triangles T having a point E moves is in the penalty."""
-    tm = (np.diff(E.indptr) > 0)[T].any(axis=1)
-    check = np.flatnonzero(tm[A] | tm[B])
+    now; (A, B) every pair of triangles T having a point E moves."""
     # every pair the region can change is in the penalty: measured, leaving out those far
     # below the bound (20 degrees) let the optimisation fold them (the cow: 84 / 42 pairs
     # above 60 / 90 degrees against 10 / 0) and made its outcome depend on round-off
-    pen = _Penalty(P, E, T, A[check], B[check], cos0)
+    pen = _Penalty(P, E, T, A, B, cos0)
     zero = np.zeros((E.shape[1], 3))
     cos = pen.cosines(zero)
     if not (cos < cos0).any():
@@ -395,9 +430,9 @@ class _Penalty:
     others keep their normals at z = 0. Coordinates are rows ((3, k) arrays)."""
 
     def __init__(self, P0, Es, T, A, B, cos0):
-        tris, inv = np.unique(np.concatenate([A, B]), return_inverse=True)
-        pts = np.unique(T[tris].ravel())
-        Tl = np.searchsorted(pts, T[tris])                  # (t, 3) into pts
+        tris, inv = _compact(np.concatenate([A, B]), len(T))
+        pts, Tl = _compact(T[tris].ravel(), len(P0))
+        Tl = Tl.reshape(-1, 3)                              # (t, 3) into pts
         E = Es[pts]
         mov = (np.diff(E.indptr) > 0)[Tl].any(axis=1)
         order = np.concatenate([np.flatnonzero(mov), np.flatnonzero(~mov)])
@@ -405,8 +440,8 @@ class _Penalty:
         rank[order] = np.arange(len(order))
         self.A, self.B = rank[inv[:len(A)]], rank[inv[len(A):]]
         self.m = m = int(mov.sum())
-        mp = np.unique(Tl[mov].ravel())                     # the moving triangles' points
-        self.t = np.ascontiguousarray(np.searchsorted(mp, Tl[mov]).T)    # (3, m) into mp
+        mp, tm = _compact(Tl[mov].ravel(), len(pts))        # the moving triangles' points
+        self.t = np.ascontiguousarray(tm.reshape(-1, 3).T)  # (3, m) into mp
         self.x0 = np.ascontiguousarray(P0[pts][mp].T)       # (3, len(mp))
         self.E = E[mp]
         # the normals (3, t): the moving triangles' rewritten per call, the others' fixed
