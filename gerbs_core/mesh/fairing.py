@@ -56,7 +56,7 @@ from scipy.optimize import minimize
 from scipy.sparse.csgraph import connected_components
 
 from .coupling import zero_row_sums
-from .evaluate import evaluate
+from .evaluate import _blend
 from .memory import BUILD_MIN_BUDGET, fairing_estimate
 from .monomials import monomial_exponents
 from .polygon_map import map_points
@@ -207,13 +207,44 @@ def ring1_pairs(topo) -> tuple[np.ndarray, np.ndarray]:
     return key // n, key % n
 
 
-def point_factors(model, face_ids, x, rows):
+def _face_terms(model, face_ids, x, need=None):
+    """Per chunk of same-size faces of the points (face_ids (N,), layout coordinates x (N, 2);
+    :func:`gerbs_core.mesh.evaluate.groups`): (sel (F, P) the points' indices or -1, u (n, F)
+    the corners, Psi (n, F, P) the partition, mono (n, F, P, M) the corners' monomials up to
+    their highest degree), from :func:`gerbs_core.mesh.evaluate.corner_terms`. ``need`` (V,)
+    bool: only the chunks having such a corner (None: all)."""
+    from .evaluate import corner_terms, groups
+
+    topo = model.topology
+    for n, faces, sel, xb in groups(topo, model.layouts.corners, face_ids, x):
+        u = topo.face_vertices[topo.face_offsets[faces][None, :] + np.arange(n)[:, None]]
+        if need is not None and not need[u].any():
+            continue
+        _, Psi, mono, _ = corner_terms(model, n, faces, xb, 0, int(model.degrees[u].max()))
+        yield sel, u, Psi[0], mono[0]
+
+
+def _rest_points(model, X, face_ids, x):
+    """(P0 (N, 3) the surface of positions X (V, 3) at face points (face_ids (N,), layout
+    coordinates x (N, 2)): bit for bit :func:`gerbs_core.mesh.evaluate.evaluate` (the same
+    chunks and operations); the :func:`_face_terms` it used, for :func:`point_factors`)."""
+    V = model.topology.n_vertices
+    coef = model.fits(X).reshape(V, len(monomial_exponents(4)), -1)
+    P0 = np.zeros((len(face_ids), 3))
+    terms = []
+    for sel, u, Psi, mono in _face_terms(model, face_ids, x):
+        ok = sel >= 0
+        P0[sel[ok]] = _blend([Psi], [mono], X[u], coef[u][:, :, :mono.shape[-1]], 0)[0][ok]
+        terms.append((sel, u, Psi, mono))
+    return P0, terms
+
+
+def point_factors(model, face_ids, x, rows, terms=None):
     """E csr (N, len(rows)): the columns ``rows`` (v MMAX + m, sorted) of the stencil's
     factor E (:mod:`gerbs_core.mesh.stencil`) at face points (face_ids (N,), layout
     coordinates x (N, 2)): S = B X + E c, so E[:, rows] maps those coefficients to the
-    points. Only the terms of those rows are made."""
-    from .evaluate import corner_terms, groups
-
+    points. Only the terms of those rows are made; ``terms``: :func:`_face_terms` of
+    these points if already made."""
     topo = model.topology
     V, mmax = topo.n_vertices, len(monomial_exponents(4))
     col = np.full(V * mmax, -1, dtype=np.int64)
@@ -221,21 +252,21 @@ def point_factors(model, face_ids, x, rows):
     mine = np.zeros(V, bool)
     mine[np.asarray(rows) // mmax] = True
     r_, c_, v_ = [], [], []
-    for n, faces, sel, xb in groups(topo, model.layouts.corners, face_ids, x):
-        u = topo.face_vertices[topo.face_offsets[faces][None, :] + np.arange(n)[:, None]]
+    for sel, u, Psi, mono in (_face_terms(model, face_ids, x, mine) if terms is None else terms):
         if not mine[u].any():
             continue
-        _, Psi, mono, _ = corner_terms(model, n, faces, xb, 0, int(model.degrees[u].max()))
-        M = mono[0].shape[-1]
+        M = mono.shape[-1]
         cols = col[u[..., None] * mmax + np.arange(M)]                 # (n, F, M)
         k, f, m = np.nonzero(cols >= 0)
-        val = Psi[0][k, f] * mono[0][k, f, :, m]                         # (t, P)
+        val = Psi[k, f] * mono[k, f, :, m]                              # (t, P)
         ok = sel[f] >= 0                                                # (t, P)
         r_.append(sel[f][ok])
         c_.append(np.broadcast_to(cols[k, f, m][:, None], ok.shape)[ok])
         v_.append(val[ok])
     def cat(parts, dtype):
-        return np.concatenate(parts) if parts else np.empty(0, dtype)
+        out = np.concatenate(parts) if parts else np.empty(0, dtype)
+        parts.clear()
+        return out
 
     return sp.csr_matrix((cat(v_, float), (cat(r_, np.int64), cat(c_, np.int64))),
                          shape=(len(face_ids), len(rows)))
@@ -290,8 +321,7 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     face = np.asarray(lat.face)[pts]
     x = map_points(topo, np.asarray(model.layouts.corners, dtype=np.float64), face, fan[pts],
                    uv[pts])
-    c0 = model.fits(X)
-    P0 = evaluate(model, X, c0.reshape(V, mmax, -1), face, x, 0)[0][0]
+    P0, terms = _rest_points(model, X, face, x)
     A, B = triangle_pairs(T)
     cos0 = np.cos(np.radians(rule.turn))
     n0 = _normals(np.ascontiguousarray(P0.T), np.ascontiguousarray(T.T))[0]
@@ -317,12 +347,9 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     scale = rings_h[rv] ** (mdeg[rm] - 1.0)
     # the factor's columns of the rows on the points of the faces having an active corner
     # (the only points they move), scaled to the unknowns z
-    fmov = np.zeros(topo.n_faces, bool)
-    fmov[cf[act[fv]]] = True
-    mp = np.flatnonzero(fmov[face])
-    Em = point_factors(model, face[mp], x[mp], rows).tocoo()
-    Es = sp.csr_matrix((Em.data / scale[Em.col], (mp[Em.row], Em.col)),
-                       shape=(len(pts), len(rows)))
+    Es = point_factors(model, face, x, rows, terms)
+    del terms
+    Es.data /= scale[Es.indices]
     # the regions of sharp turns (connected components of the active vertices in ring 1),
     # faired one after the other, each on the points its rows move, and kept only where it
     # turns its pairs less than before (a region where the optimisation does not settle,
@@ -380,13 +407,14 @@ def _region_pairs(labels, A, B, G):
     """(pairs, bounds): the pairs (A, B) of triangles having a point of region g (labels
     (t, 3) the regions of the triangles' points, -1 none) are pairs[bounds[g]:bounds[g+1]],
     ascending."""
-    L = np.concatenate([labels[A], labels[B]], axis=1)          # (pairs, 6)
-    hi = L.max(axis=1)
-    lo = np.where(L >= 0, L, G).min(axis=1)
+    thi = labels.max(axis=1)                                    # per triangle
+    tlo = np.where(labels >= 0, labels, G).min(axis=1)
+    hi = np.maximum(thi[A], thi[B])
+    lo = np.minimum(tlo[A], tlo[B])
     one = np.flatnonzero((hi >= 0) & (lo == hi))                # a single region (nearly all)
     many = np.flatnonzero((hi >= 0) & (lo < hi))
-    sub = L[many].ravel()
-    at = np.repeat(many, L.shape[1])[sub >= 0]
+    sub = np.concatenate([labels[A[many]], labels[B[many]]], axis=1).ravel()
+    at = np.repeat(many, 6)[sub >= 0]
     n = len(A)
     key = np.concatenate([hi[one] * n + one, np.unique(sub[sub >= 0] * n + at)])
     key.sort()
