@@ -521,7 +521,16 @@ class _Penalty:
         hit[tk] = True
         p = np.flatnonzero(hit)
         G = np.stack([np.bincount(tk, g[j], minlength=len(hit))[p] for j in range(3)], axis=1)
-        return float(np.dot(r, r)), self.E[p].T @ G
+        # E[p]^T G without making E[p]: the entries of rows p, in order (so every sum runs
+        # over the points in ascending order, as a product with E[p]^T would)
+        E = self.E
+        lo, cnt = E.indptr[p], E.indptr[p + 1] - E.indptr[p]
+        at = np.arange(cnt.sum()) + np.repeat(lo - (np.cumsum(cnt) - cnt), cnt)
+        cols, vals = E.indices[at], E.data[at]
+        n = E.shape[1]
+        grad = np.stack([np.bincount(cols, vals * np.repeat(G[:, j], cnt), minlength=n)
+                         for j in range(3)], axis=1)
+        return float(np.dot(r, r)), grad
 
 
 def _offset_weights(target, D, owner, pair_vertex, pair_offset, V):
