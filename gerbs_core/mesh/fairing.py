@@ -439,9 +439,15 @@ def _fair_region(P, E, T, A, B, cos0, rule):
         F, g = pen(z.reshape(-1, 3))
         return F + weight * float(np.dot(z, z)), (g + 2.0 * weight * z.reshape(-1, 3)).ravel()
 
+    # ftol: L-BFGS-B stops when an iteration lowers f by less than ftol max(|f|, 1), i.e.
+    # (f < 1) by less than a tenth of the squared excess of one pair 0.1 degrees beyond the
+    # bound. Measured against 1e-9: the same fold counts at r = 4 / 8 / 16 on Suzanne, the
+    # cow and bunny10k, unperturbed and perturbed (the cow's r = 4 pairs above 90: 9 -> 8),
+    # in 26% / 32% fewer evaluations on the cow / bunny10k (where regions settle early and
+    # the line searches then wasted evaluations at round-off level)
     z = minimize(f, zero.ravel(), jac=True, method="L-BFGS-B",
                  options={"maxiter": rule.turn_iterations, "maxcor": 10,
-                          "ftol": 1e-9, "gtol": 1e-7}).x.reshape(-1, 3)
+                          "ftol": 1e-7, "gtol": 1e-7}).x.reshape(-1, 3)
     now = pen.cosines(z)
     # kept where it turns the region's pairs less: a smaller sum of squared excesses over
     # the bound and no more pairs beyond 60 or 90 degrees
