@@ -224,19 +224,22 @@ def _face_terms(model, face_ids, x, need=None):
         yield sel, u, Psi[0], mono[0]
 
 
-def _rest_points(model, X, face_ids, x):
-    """(P0 (N, 3) the surface of positions X (V, 3) at face points (face_ids (N,), layout
-    coordinates x (N, 2)): bit for bit :func:`gerbs_core.mesh.evaluate.evaluate` (the same
-    chunks and operations); the :func:`_face_terms` it used, for :func:`point_factors`)."""
+def _rest_points(model, X, face_ids, x, P0, at):
+    """The surface of positions X (V, 3) at the face points ``at`` of (face_ids (N,), layout
+    coordinates x (N, 2)), written into P0[at] (P0 (N, 3)): bit for bit
+    :func:`gerbs_core.mesh.evaluate.evaluate` (the same operations per face; a point's
+    value does not depend on the others evaluated with it). Returns the
+    :func:`_face_terms` it used (their indices into the N points), for
+    :func:`point_factors`."""
     V = model.topology.n_vertices
     coef = model.fits(X).reshape(V, len(monomial_exponents(4)), -1)
-    P0 = np.zeros((len(face_ids), 3))
     terms = []
-    for sel, u, Psi, mono in _face_terms(model, face_ids, x):
+    for sel, u, Psi, mono in _face_terms(model, face_ids[at], x[at]):
         ok = sel >= 0
+        sel = np.where(ok, at[np.maximum(sel, 0)], -1)
         P0[sel[ok]] = _blend([Psi], [mono], X[u], coef[u][:, :, :mono.shape[-1]], 0)[0][ok]
         terms.append((sel, u, Psi, mono))
-    return P0, terms
+    return terms
 
 
 def point_factors(model, face_ids, x, rows, terms=None):
@@ -321,13 +324,20 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     face = np.asarray(lat.face)[pts]
     x = map_points(topo, np.asarray(model.layouts.corners, dtype=np.float64), face, fan[pts],
                    uv[pts])
-    P0, terms = _rest_points(model, X, face, x)
     A, B = triangle_pairs(T)
     cos0 = np.cos(np.radians(rule.turn))
-    n0 = _normals(np.ascontiguousarray(P0.T), np.ascontiguousarray(T.T))[0]
-    cosab = _dots(n0[:, A], n0[:, B])
-    hot = (cosab < cos0) & (cand[tface[A]] | cand[tface[B]])
-    if not hot.any():
+    # the rest surface (NaN where not needed): first on the pairs having a triangle in a
+    # candidate face, the only ones whose turn can make unknowns
+    P0 = np.full((len(pts), 3), np.nan)
+    look = np.flatnonzero(cand[tface[A]] | cand[tface[B]])
+    tl, ab = _compact(np.concatenate([A[look], B[look]]), len(T))
+    done = np.zeros(len(pts), bool)
+    done[T[tl]] = True
+    terms = _rest_points(model, X, face, x, P0, np.flatnonzero(done))
+    n0 = _normals(np.ascontiguousarray(P0.T), np.ascontiguousarray(T[tl].T))[0]
+    hot = look[_dots(np.take(n0, ab[:len(look)], axis=1),
+                     np.take(n0, ab[len(look):], axis=1)) < cos0]
+    if not len(hot):
         return None, len(pts)
     # the variables: the corners of the faces holding a turn above the bound, and ring 1
     faces = np.unique(tface[np.concatenate([A[hot], B[hot]])])
@@ -345,11 +355,6 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     rm = order[np.arange(len(rv)) - np.repeat(np.cumsum(nm[av]) - nm[av], nm[av])]
     rows = rv * mmax + rm
     scale = rings_h[rv] ** (mdeg[rm] - 1.0)
-    # the factor's columns of the rows on the points of the faces having an active corner
-    # (the only points they move), scaled to the unknowns z
-    Es = point_factors(model, face, x, rows, terms)
-    del terms
-    Es.data /= scale[Es.indices]
     # the regions of sharp turns (connected components of the active vertices in ring 1),
     # faired one after the other, each on the points its rows move, and kept only where it
     # turns its pairs less than before (a region where the optimisation does not settle,
@@ -358,14 +363,23 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     region = np.full(V, -1)
     region[av] = connected_components(graph, directed=False)[1]
     row_region = region[rv]
-    # a point's region: that of its face's active corners (a face's corners are in one
-    # another's ring 1, so in one region); every pair having a point a region moves is
-    # in its penalty
+    # the points the rows move: those of the faces having an active corner, labelled with
+    # the corner's region (a face's corners are in one another's ring 1, so in one region);
+    # every pair having a point a region moves is in its penalty
     fregion = np.full(topo.n_faces, -1)
     fregion[cf[act[fv]]] = region[fv[act[fv]]]
-    label = np.where(np.diff(Es.indptr) > 0, fregion[face], -1)
+    label = fregion[face]
     G = int(region.max()) + 1
     pairs, bounds = _region_pairs(label[T], A, B, G)
+    # the rest surface on the rest of those pairs' points
+    more = np.zeros(len(pts), bool)
+    more[T[A[pairs]]] = True
+    more[T[B[pairs]]] = True
+    terms += _rest_points(model, X, face, x, P0, np.flatnonzero(more & ~done))
+    # the factor's columns of the rows on the points they move, scaled to the unknowns z
+    Es = point_factors(model, face, x, rows, terms)
+    del terms
+    Es.data /= scale[Es.indices]
     Ec = Es.tocsc()
     P = P0.copy()
     z = np.zeros((len(rows), 3))
