@@ -234,11 +234,17 @@ def _rest_points(model, X, face_ids, x, P0, at):
     V = model.topology.n_vertices
     coef = model.fits(X).reshape(V, len(monomial_exponents(4)), -1)
     terms = []
-    for sel, u, Psi, mono in _face_terms(model, face_ids[at], x[at]):
-        ok = sel >= 0
-        sel = np.where(ok, at[np.maximum(sel, 0)], -1)
-        P0[sel[ok]] = _blend([Psi], [mono], X[u], coef[u][:, :, :mono.shape[-1]], 0)[0][ok]
-        terms.append((sel, u, Psi, mono))
+    # faces by their number of such points (within a factor 2), so that a face with a few
+    # of them (a strip along a side) is not padded to a whole face's count
+    count = np.bincount(face_ids[at], minlength=model.topology.n_faces)[face_ids[at]]
+    size = np.ceil(np.log2(count)).astype(np.int64)
+    for b in np.unique(size):
+        ab = at[size == b]
+        for sel, u, Psi, mono in _face_terms(model, face_ids[ab], x[ab]):
+            ok = sel >= 0
+            sel = np.where(ok, ab[np.maximum(sel, 0)], -1)
+            P0[sel[ok]] = _blend([Psi], [mono], X[u], coef[u][:, :, :mono.shape[-1]], 0)[0][ok]
+            terms.append((sel, u, Psi, mono))
     return terms
 
 
