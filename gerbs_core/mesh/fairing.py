@@ -161,8 +161,11 @@ class FairedFits:
 
 def _cross(a, b):
     """Cross products of the columns of (3, n) arrays (rows x, y, z)."""
-    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
+    out = np.empty((3, a.shape[1]))
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        np.multiply(a[j], b[k], out=out[i])
+        out[i] -= a[k] * b[j]
+    return out
 
 
 def _dots(a, b):
@@ -178,7 +181,8 @@ def _normals(x, t):
     e1, e2 = x1 - x0, x2 - x0
     c = _cross(e1, e2)
     ln = np.sqrt(_dots(c, c))
-    return c / np.maximum(ln, 1e-300), (e1, e2), ln
+    c /= np.maximum(ln, 1e-300)
+    return c, (e1, e2), ln
 
 
 def turn_penalty(P, T, A, B, cos0):
@@ -507,7 +511,9 @@ class _Penalty:
     def _update(self, z):
         """The moving triangles' (normals, (e1, e2), |e1 x e2|) at z, written into N too."""
         zt = np.ascontiguousarray(np.asarray(z).T)
-        x = np.stack([self.x0[j] + self.E @ zt[j] for j in range(3)])
+        x = np.empty_like(self.x0)
+        for j in range(3):
+            np.add(self.x0[j], self.E @ zt[j], out=x[j])
         out = _normals(x, self.t)
         self.N[:, :self.m] = out[0]
         return out
