@@ -75,12 +75,14 @@ class FairingSkipped(Exception):
 
 
 def triangle_pairs(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(A, B) the two triangles (T, 3) of every edge shared by exactly two of them."""
+    """(A, B) the two triangles (T, 3) of every edge shared by exactly two of them: pairs in
+    the order of their edges' (lower, higher) corner, A the one whose edge comes first in
+    the order (corners 01 of every triangle, then 12, then 20)."""
     T = np.asarray(triangles, dtype=np.int64)
-    e = np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), axis=1)
-    tri = np.tile(np.arange(len(T)), 3)
-    n = int(T.max()) + 1 if len(T) else 0
-    key = e[:, 0] * n + e[:, 1]
+    m = len(T)
+    nxt = T[:, [1, 2, 0]]
+    n = int(T.max()) + 1 if m else 0
+    key = (np.minimum(T, nxt) * n + np.maximum(T, nxt)).T.ravel()    # edge 01s, 12s, 20s
     o = np.argsort(key, kind="stable")
     k = key[o]
     new = np.ones(len(k), bool)
@@ -88,7 +90,7 @@ def triangle_pairs(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     start = np.flatnonzero(new)
     count = np.diff(np.append(start, len(k)))
     two = start[count == 2]
-    return tri[o[two]], tri[o[two + 1]]
+    return o[two] % m, o[two + 1] % m
 
 
 @dataclass(frozen=True)
