@@ -201,6 +201,15 @@ def _crease(obj):
     me.update()
 
 
+def _vertex_crease(obj):
+    me = obj.data
+    attr = me.attributes.get("crease_vert") or me.attributes.new("crease_vert", "FLOAT", "POINT")
+    values = np.zeros(len(me.vertices), np.float32)
+    values[4] = 1.0
+    attr.data.foreach_set("value", values)
+    me.update()
+
+
 def _settings(**changes):
     def change(obj):
         from blender_addon import api
@@ -228,6 +237,7 @@ CHANGES = {
     "merge distance": ({"merge": True}, _settings(merge_distance=0.001), False),
     "memory budget": ({}, _settings(memory_budget=5e8), False),
     "crease": ({}, _crease, True),
+    "vertex crease": ({"kind": "icosphere"}, _vertex_crease, True),
     "normals on": ({"kind": "icosphere"}, _settings(use_normals=True), True),
     "normals off": ({"kind": "icosphere", "use_normals": True}, _settings(use_normals=False),
                     True),
