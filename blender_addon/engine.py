@@ -15,7 +15,11 @@ with what was last built:
   positions for the rest shape bound at build time, kept until ``force=True``, the
   "Rebuild" operator); when only a few vertices moved just their contribution
   (``Stencil.apply_moved``), so the cost is local;
-* anything else -> a full rebuild through ``gerbs_core`` and a new result mesh.
+* anything else -> a full rebuild through ``gerbs_core`` and a new result mesh; the
+  surface (the model) is reused when its ``BlendingSurface`` arguments are exactly those
+  of the surface this modifier's viewport or render state holds (build.make_model: a
+  Resolution change, a render at the Render Resolution; never for a Rebuild), so only the
+  output at the new resolution is made.
 
 Every write stores the input it was built from on the result (snapshot.py), which
 is what the node group checks before showing it, with a new stamp: while the node
