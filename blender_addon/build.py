@@ -8,9 +8,20 @@ the fast path of later edits; None with Hermite normals, whose surface is not
 stencil; with Hermite normals one assembled from the surface's own partition and
 fits, made on first use). :func:`write_geometry` and :func:`write_carried` put it
 into the result mesh (mesh_io, transfer, carry_write, snapshot).
+
+The surface's model (layouts, charts, cover, fits, the fairing: most of a build's cost)
+depends only on the ``BlendingSurface`` constructor's arguments, the output resolution
+only on ``stencil`` / ``tessellate``. A build is therefore two steps: :func:`make_model`
+(the surface, and :func:`model_key`, a digest of exactly the arguments it was constructed
+with) and :func:`evaluate` (its output at one resolution). ``make_model`` reuses a held
+:class:`Model` whose key is equal -- equal arguments give the same surface bit for bit --
+and constructs a new one otherwise (:data:`counts` counts both, for tests).
 """
 from __future__ import annotations
 
+import hashlib
+import numbers
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,27 +54,111 @@ class Built:
     surface: object  # the BlendingSurface (its repair maps output elements to the input's)
 
 
-def build_surface(settings: dict, inp, resolution: int, progress, creases=None,
-                  rest=None) -> Built:
-    """The surface of `inp` with `settings` at `resolution` (raises GERBSError);
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A constructed ``BlendingSurface`` and :func:`model_key` of its arguments (None: an
+    argument the key cannot digest; such a model is never reused)."""
+
+    key: str | None
+    surface: object
+
+
+counts: Counter = Counter()  # "built": BlendingSurfaces constructed, "reused": held ones reused
+
+
+class _Undigestable(TypeError):
+    pass
+
+
+def _feed(h, value) -> None:
+    """Feed `value` into hash `h`, typed and delimited, so that unequal values (or equal
+    values of another type, dtype or shape) feed different bytes."""
+    from .core import module
+
+    if value is None:
+        h.update(b"N;")
+    elif isinstance(value, np.ndarray):
+        a = np.ascontiguousarray(value)
+        h.update(f"A{a.dtype.str}{a.shape};".encode())
+        h.update(a.tobytes())
+    elif isinstance(value, (bool, np.bool_)):
+        h.update(b"B1;" if value else b"B0;")
+    elif isinstance(value, numbers.Integral):
+        h.update(f"I{type(value).__name__}:{int(value)};".encode())
+    elif isinstance(value, numbers.Real):
+        h.update(f"F{type(value).__name__}:{float(value).hex()};".encode())
+    elif isinstance(value, str):
+        data = value.encode()
+        h.update(f"S{len(data)}:".encode() + data)
+    elif isinstance(value, (list, tuple)):
+        h.update(f"{'L' if isinstance(value, list) else 'T'}{len(value)}(".encode())
+        for item in value:
+            _feed(h, item)
+        h.update(b")")
+    elif isinstance(value, dict):
+        h.update(f"D{len(value)}(".encode())
+        for key in sorted(value):
+            _feed(h, key)
+            _feed(h, value[key])
+        h.update(b")")
+    elif isinstance(value, module("kernels").Kernel):
+        # kernels are immutable value objects identified by type and parameters (their
+        # own == and hash)
+        kind = type(value)
+        h.update(f"K{kind.__module__}.{kind.__qualname__}".encode())
+        _feed(h, tuple(value._params()))
+    else:
+        raise _Undigestable(type(value).__name__)
+
+
+def model_key(arguments: dict) -> str | None:
+    """A digest of `arguments`, the ``BlendingSurface`` keyword arguments: arrays by dtype,
+    shape and bytes, scalars, strings and kernels by type and value. Equal keys, equal
+    arguments; None if an argument is of a type it does not know (never reused)."""
+    h = hashlib.blake2b(digest_size=20)
+    try:
+        _feed(h, arguments)
+    except _Undigestable:
+        return None
+    return h.hexdigest()
+
+
+def surface_arguments(settings: dict, inp, creases=None, rest=None) -> dict:
+    """Every argument of the ``BlendingSurface`` of `inp` with `settings` (keywords):
     `creases`: :class:`blender_addon.creases.Creases` (None: none); `rest`: (V, 3) the rest
     shape it is bound to (Rest Shape Bound, rest.py; None: `inp`'s positions)."""
+    args = settings_mod.core_arguments(settings)
+    normals = None if inp.normals is None else inp.normals.astype(np.float64)
+    crease_args = creases.core_arguments() if creases is not None else {}  # creases.py
+    return dict(vertices=inp.positions.astype(np.float64), faces=inp.faces(),
+                kernel=args.kernel, normals=normals, rest_positions=rest, **args.surface,
+                **crease_args)
+
+
+def make_model(arguments: dict, held=()) -> Model:
+    """The surface of `arguments` (:func:`surface_arguments`): the first of the `held`
+    models (:class:`Model` or None) with an equal key, else a new one (raises GERBSError)."""
     from .core import module, scipy_problem
     from .errors import MissingDependencyError
 
+    key = model_key(arguments)
+    if key is not None:
+        for model in held:
+            if model is not None and model.key == key:
+                counts["reused"] += 1
+                return model
     if problem := scipy_problem():  # a message in the panel and status bar, not a traceback
         raise MissingDependencyError(problem)
-    BlendingSurface = module("mesh.surface").BlendingSurface
+    surface = module("mesh.surface").BlendingSurface(**arguments)
+    counts["built"] += 1
+    return Model(key, surface)
 
-    args = settings_mod.core_arguments(settings)
-    X = inp.positions.astype(np.float64)
-    normals = None if inp.normals is None else inp.normals.astype(np.float64)
-    progress(0.05, "building surface")
-    crease_args = creases.core_arguments() if creases is not None else {}
-    surface = BlendingSurface(X, inp.faces(), kernel=args.kernel, normals=normals,
-                              rest_positions=rest, **args.surface,
-                              **crease_args)  # creases: creases.py
-    if normals is not None:  # Hermite normals: not W @ X (the core refuses a stencil)
+
+def evaluate(model: Model, arguments: dict, resolution: int, progress) -> Built:
+    """The output of `model`'s surface (made from `arguments`) at `resolution` (raises
+    GERBSError, e.g. a resolution over the memory budget)."""
+    surface, X = model.surface, arguments["vertices"]
+    if arguments["normals"] is not None:  # Hermite normals: not W @ X (no stencil)
         progress(0.35, "evaluating surface")
         P = surface.tessellate(resolution)[0]
         lattice = surface.lattice(resolution)
@@ -71,6 +166,15 @@ def build_surface(settings: dict, inp, resolution: int, progress, creases=None,
     progress(0.35, "building stencil")
     stencil = surface.stencil(resolution)
     return Built(stencil.apply(X), stencil.lattice, stencil, stencil, surface)
+
+
+def build_surface(settings: dict, inp, resolution: int, progress, creases=None,
+                  rest=None, held=()) -> Built:
+    """The surface of `inp` with `settings` at `resolution` (raises GERBSError); `creases`,
+    `rest`: :func:`surface_arguments`; `held`: models it may reuse (:func:`make_model`)."""
+    arguments = surface_arguments(settings, inp, creases, rest)
+    progress(0.05, "building surface")
+    return evaluate(make_model(arguments, held), arguments, resolution, progress)
 
 
 def write_geometry(mesh, built: Built, previous: Transfer | None, inp) -> Transfer:

@@ -15,7 +15,11 @@ with what was last built:
   positions for the rest shape bound at build time, kept until ``force=True``, the
   "Rebuild" operator); when only a few vertices moved just their contribution
   (``Stencil.apply_moved``), so the cost is local;
-* anything else -> a full rebuild through ``gerbs_core`` and a new result mesh.
+* anything else -> a full rebuild through ``gerbs_core`` and a new result mesh; the
+  surface (the model) is reused when its ``BlendingSurface`` arguments are exactly those
+  of the surface this modifier's viewport or render state holds (build.make_model: a
+  Resolution change, a render at the Render Resolution; never for a Rebuild), so only the
+  output at the new resolution is made.
 
 Every write stores the input it was built from on the result (snapshot.py), which
 is what the node group checks before showing it, with a new stamp: while the node
@@ -59,7 +63,8 @@ from . import geometry_nodes as gn
 from . import finite, linked, mesh_io, results, snapshot, stack
 from . import rest as rest_mod
 from . import settings as settings_mod
-from .build import build_surface, write_carried, write_geometry
+from . import build as build_mod
+from .build import write_carried, write_geometry
 from .errors import PREFIX, format_error, format_warnings
 from .progress import silent
 from .stencil_update import apply_stencil
@@ -290,7 +295,7 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     outcome = _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0)
     if outcome is None:
         bound = _rest_shape(mod, res, shown, (st, view), inp, settings, force, render)
-        outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz, bound),
+        outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz, bound, force),
                            progress, t0, render)
     return SyncResult(outcome.status, outcome.message, outcome.rebind, retry) if retry else outcome
 
@@ -366,23 +371,42 @@ def _rest_shape(mod, res, shown, states, inp, settings, force, render):
     return rest_mod.kept(inp, states, results)
 
 
+def _held_models(obj, mod, render: bool, force: bool) -> tuple:
+    """The surfaces the modifier's two states hold (this result's first): a build whose
+    ``BlendingSurface`` arguments equal one's reuses it (build.make_model). None for a
+    Rebuild (`force`), which constructs the surface anew."""
+    if force:
+        return ()
+    held = (_states.get(state_key(obj, mod, r)) for r in (render, not render))
+    return tuple(st.model for st in held if st is not None and st.model is not None)
+
+
 def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
-    """A full build at ``build = (resolution, creases, rest shape or None)`` into result
-    `res`."""
-    resolution, crz, bound = build
+    """A full build at ``build = (resolution, creases, rest shape or None, force)`` into
+    result `res`: the surface of a held model when its arguments are the same and not
+    `force` (only the output at `resolution` is made), else a new one."""
+    resolution, crz, bound, force = build
     from .errors import GERBSError, InvalidMeshError
 
     key = state_key(obj, mod, render)
     X = inp.positions.astype(np.float64)
     st = SurfaceState(settings=skey, input=inp, positions=X, rest=X if bound is None else bound,
                       result_uid=res.session_uid)
+    # a Bound surface is given its rest shape even when it binds the current positions
+    # (the same surface as rest None), so its later builds have the same arguments
+    rest = st.rest if settings["rest"] == "bound" else None
     try:
-        built = build_surface(settings, inp, resolution, progress, crz, rest=bound)
+        progress(0.05, "building surface")
+        arguments = build_mod.surface_arguments(settings, inp, crz, rest)
+        # kept on the state even if the output fails (a resolution over the memory budget)
+        st.model = build_mod.make_model(arguments, _held_models(obj, mod, render, force))
+        built = build_mod.evaluate(st.model, arguments, resolution, progress)
     except GERBSError as exc:
         return _fail(obj, mod, key, st, format_error(exc), progress,
                      problem=exc if isinstance(exc, InvalidMeshError) else None, render=render)
     except Exception as exc:  # a defect of the core must not reach Blender raw
         log.exception("GERBS: surface build failed for %s", obj.name)
+        st.model = None  # not offered for reuse
         return _fail(obj, mod, key, st, format_error(exc), progress, render=render)
     progress(0.8, "writing result mesh")
     P = built.points

@@ -20,6 +20,9 @@ class SurfaceState:
     input: mesh_io.MeshInput
     positions: np.ndarray  # (V, 3) float64 of input.positions
     stencil: object = None  # gerbs_core.mesh.stencil.Stencil (P points from V positions)
+    # build.Model: the BlendingSurface built (or reused) and the digest of its arguments;
+    # a build with equal arguments at another resolution reuses it (engine._held_models)
+    model: object = None
     rest: np.ndarray | None = None  # (V, 3) the rest shape the stencil is bound to
     transfer: object = None  # transfer.Transfer: the output's maps of carried layers
     points: np.ndarray | None = None  # (P, 3) float64 last output (for partial updates)
