@@ -100,11 +100,13 @@ class FairnessRule:
     # the fairing (mesh.fairing): the largest angle (degrees) between neighbouring triangles
     # of the lattice at turn_resolution before the coefficients are corrected (180: off),
     # the correction's weight per coefficient (dimensionless), L-BFGS's iterations per
-    # round, the highest degree of a corrected monomial
+    # region (30: the fold counts at r = 8 of 40, fewer at r = 4 and 16 on Suzanne and the
+    # cow, in 25% fewer evaluations; docs/design.md "Fairing"), the highest degree of a
+    # corrected monomial
     turn: float = 35.0
     turn_resolution: int = 8
     turn_weight: float = 0.03
-    turn_iterations: int = 40
+    turn_iterations: int = 30
     turn_degree: int = 4
     # only faces having a corner whose cage star spreads above this (degrees) are looked
     # at (smooth fine meshes: no lattice is made)
