@@ -3,7 +3,8 @@
 For Suzanne, an icosphere and 32x32 and 64x64 quad grids at resolutions giving about 8k,
 32k and 126k output points: build time (BlendingSurface + stencil from scratch; the
 stencil's share printed separately),
-update time (W @ X), memory (tracemalloc peak of the build), nnz per row; and,
+update time (W @ X, every vertex moved; and one vertex moved by Stencil.apply_moved, what a
+drag's step costs), memory (tracemalloc peak of the build), nnz per row; and,
 when ``import bpy`` works, Blender's Subdivision Surface modifier at the matching
 level (level L <-> resolution 2**L) in the same run: build = add the modifier and
 evaluate the depsgraph from scratch; update = move one vertex and evaluate again.
@@ -79,12 +80,26 @@ def gerbs_case(V, F, r, repeats, subsurf_build=None):
         return st.apply(X)
 
     tu, _ = median_time(update, max(repeats, 20))
+    # One vertex moved, as a drag does (Stencil.apply_moved): the first step takes the
+    # vertex's columns of W, every further step of the same drag reuses them.
+    pts = st.apply(V)
+    moved = np.array([len(V) // 2])
+    sign = [1.0]
+
+    def drag_step():
+        st.apply_moved(pts, moved, np.full((1, V.shape[1]), 1e-3 * sign[0]))
+        sign[0] = -sign[0]
+
+    t = time.perf_counter()
+    drag_step()
+    t1first = time.perf_counter() - t
+    t1, _ = median_time(drag_step, max(repeats, 20))
     tracemalloc.start()
     build()
     peak = tracemalloc.get_traced_memory()[1]
     tracemalloc.stop()
     return dict(points=st.shape[0], build=tb, stencil=statistics.median(tst[:repeats]),
-                update=tu, mem=peak / 1e6,
+                update=tu, one=t1, one_first=t1first, mem=peak / 1e6,
                 nnz=st.nnz_per_row(), eps0=s.eps0,
                 ss_build=statistics.median(tss) if tss else None)
 
@@ -191,13 +206,15 @@ def main():
         bpy = None
     meshes = {"suzanne": P.suzanne(), "icosphere(3)": P.icosphere(3), "grid 32x32": P.grid(32, 32),
               "grid 64x64": P.grid(64, 64)}
-    print("build: BlendingSurface + stencil from scratch; update: W @ X; "
-          "Subsurf (ss) at level L = log2 r")
+    print("build: BlendingSurface + stencil from scratch; update: W @ X (every vertex moved); "
+          "1-vert: one vertex moved (Stencil.apply_moved, a drag's step; first = the drag's "
+          "first step, which takes the vertex's columns); Subsurf (ss) at level L = log2 r, "
+          "its update = one vertex moved and the depsgraph evaluated")
     print(f"{'mesh':13} {'L/r':>4} {'points':>7} {'build s':>8} {'stencil s':>9} "
-          f"{'update ms':>9} "
+          f"{'update ms':>9} {'1-vert ms':>9} {'first ms':>8} "
           f"{'mem MB':>7} "
           f"{'nnz/row':>7} {'eps0':>6} | {'ss points':>9} {'ss build s':>10} {'ss upd ms':>9} | "
-          f"{'build x':>7} {'update x':>8}")
+          f"{'build x':>7} {'update x':>8} {'1-vert x':>8}")
     for name, (V, F) in meshes.items():
         if args.quick and name != "suzanne":
             continue
@@ -208,12 +225,13 @@ def main():
             g = gerbs_case(V, F, r, args.repeats, ss_build)
             line = (f"{name:13} {level}/{r:<2} {g['points']:7d} {g['build']:8.3f} "
                     f"{g['stencil']:9.3f} "
-                    f"{g['update'] * 1e3:9.2f} {g['mem']:7.0f} {g['nnz']:7.1f} {g['eps0']:6.3f}")
+                    f"{g['update'] * 1e3:9.2f} {g['one'] * 1e3:9.3f} {g['one_first'] * 1e3:8.2f} "
+                    f"{g['mem']:7.0f} {g['nnz']:7.1f} {g['eps0']:6.3f}")
             if bpy is not None:
                 b["build"] = g["ss_build"]
                 line += (f" | {b['points']:9d} {b['build']:10.3f} {b['update'] * 1e3:9.2f} | "
                          f"{g['build'] / b['build']:7.2f} "
-                         f"{g['update'] / b['update']:8.3f}")
+                         f"{g['update'] / b['update']:8.3f} {g['one'] / b['update']:8.3f}")
             print(line, flush=True)
     if args.tables:
         franke_table()
