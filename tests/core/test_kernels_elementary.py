@@ -7,6 +7,8 @@ import pytest
 from gerbs_core.errors import InvalidParameterError
 from gerbs_core.kernels import BFBS, ERBS, Affine, CustomCDF, Kernel, LogisticStep, Step
 
+from .ids import kernel_id
+
 
 def _cauchy(f, x, m, nodes=128):
     """f^(m)(x) by the Cauchy integral on |z - x| = min(x, 1-x)/2 (f analytic there)."""
@@ -112,7 +114,7 @@ ALL_KERNELS = [ERBS(), ERBS(lam=0.0), ERBS(0.5, 2, 1.5, 0.4, 2), BFBS(2, 2), BFB
                LogisticStep(), Affine(), Step(), CustomCDF(lambda x: x * x, [lambda x: 2 * x])]
 
 
-@pytest.mark.parametrize("k", ALL_KERNELS, ids=repr)
+@pytest.mark.parametrize("k", ALL_KERNELS, ids=kernel_id)
 def test_contract_scalars_shapes_nan_for_every_kernel(k):
     n = min(2, k.max_order)
     t = np.array([[0.3, np.nan, 1.5], [0.0, -2.0, 0.7]])

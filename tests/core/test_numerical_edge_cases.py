@@ -20,6 +20,8 @@ from gerbs_core.datasets import primitives
 from gerbs_core.errors import InvalidMeshError, InvalidParameterError
 from gerbs_core.kernels import BFBS, ERBS, Affine, CustomCDF, LogisticStep, Step
 
+from .ids import kernel_id
+
 KERNELS = [
     ERBS(),                                               # rational fast path
     ERBS(alpha=2.0, beta=0.7, gamma=1.5, lam=0.3, sigma=0.75),  # general E, clipped derivatives
@@ -36,7 +38,7 @@ def _same(a, b):
     return a.shape == b.shape and np.array_equal(a, b, equal_nan=True)
 
 
-@pytest.mark.parametrize("kernel", KERNELS, ids=repr)
+@pytest.mark.parametrize("kernel", KERNELS, ids=kernel_id)
 def test_every_input_shape_agrees_with_the_1d_evaluation(kernel):
     n = min(2, kernel.max_order)
     flat = np.array(POINTS)
