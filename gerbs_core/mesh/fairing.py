@@ -67,9 +67,9 @@ from .evaluate import _blend
 from .memory import BUILD_MIN_BUDGET, fairing_estimate
 from .monomials import monomial_exponents
 from .polygon_map import map_points
+from .triangle_edges import triangle_pairs
 
-__all__ = ["TurnCorrection", "FairedFits", "FairingSkipped", "turn_correction",
-           "triangle_pairs"]
+__all__ = ["TurnCorrection", "FairedFits", "FairingSkipped", "turn_correction"]
 
 
 class FairingSkipped(Exception):
@@ -79,25 +79,6 @@ class FairingSkipped(Exception):
     def __init__(self, points: int):
         super().__init__(points)
         self.points = points
-
-
-def triangle_pairs(triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(A, B) the two triangles (T, 3) of every edge shared by exactly two of them: pairs in
-    the order of their edges' (lower, higher) corner, A the one whose edge comes first in
-    the order (corners 01 of every triangle, then 12, then 20)."""
-    T = np.asarray(triangles, dtype=np.int64)
-    m = len(T)
-    nxt = T[:, [1, 2, 0]]
-    n = int(T.max()) + 1 if m else 0
-    key = (np.minimum(T, nxt) * n + np.maximum(T, nxt)).T.ravel()    # edge 01s, 12s, 20s
-    o = np.argsort(key, kind="stable")
-    k = key[o]
-    new = np.ones(len(k), bool)
-    new[1:] = k[1:] != k[:-1]
-    start = np.flatnonzero(new)
-    count = np.diff(np.append(start, len(k)))
-    two = start[count == 2]
-    return o[two] % m, o[two + 1] % m
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..mesh.triangle_edges import edge_runs
+
 __all__ = ["triangle_normals", "edge_adjacency", "orientation_defects", "dihedral_angles",
            "fold_counts", "vertex_normals", "mixed_areas", "cotangent_mean_curvature",
            "mean_curvature_from_derivatives", "box_ratio", "observed_order"]
@@ -66,16 +68,11 @@ def edge_adjacency(triangles):
       ``n_nonmanifold``: number of edges with three or more triangles.
     """
     T = np.asarray(triangles, dtype=np.int64)
-    d = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])  # directed half-edges
-    tri = np.tile(np.arange(len(T)), 3)
-    n = int(T.max()) + 1 if len(T) else 0
-    key = np.minimum(d[:, 0], d[:, 1]) * n + np.maximum(d[:, 0], d[:, 1])  # undirected edge
-    order = np.argsort(key, kind="stable")
-    key, d, tri = key[order], d[order], tri[order]
-    new = np.ones(len(key), dtype=bool)
-    new[1:] = key[1:] != key[:-1]
-    start = np.flatnonzero(new)
-    count = np.diff(np.append(start, len(key)))
+    m = len(T)
+    order, start, count = edge_runs(T)
+    tri = order % m
+    corner = order // m
+    d = np.stack([T[tri, corner], T[tri, (corner + 1) % 3]], axis=1)  # half-edges, sorted
     two = start[count == 2]
     return {
         "pairs": np.stack([tri[two], tri[two + 1]], axis=1),

@@ -7,7 +7,8 @@ import pytest
 from gerbs_core import BlendingSurface, FairnessRule
 from gerbs_core.datasets import primitives as P
 from gerbs_core.errors import InvalidParameterError
-from gerbs_core.mesh.fairing import FairedFits, triangle_pairs, turn_penalty
+from gerbs_core.mesh.fairing import FairedFits, turn_penalty
+from gerbs_core.mesh.triangle_edges import triangle_pairs
 from gerbs_core.testing import fold_counts
 
 OFF = FairnessRule(turn=180.0)
