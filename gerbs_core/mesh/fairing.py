@@ -218,15 +218,13 @@ def _face_terms(model, face_ids, x, need=None):
         yield sel, u, Psi[0], mono[0]
 
 
-def _rest_points(model, X, face_ids, x, P0, at):
-    """The surface of positions X (V, 3) at the face points ``at`` of (face_ids (N,), layout
-    coordinates x (N, 2)), written into P0[at] (P0 (N, 3)): bit for bit
-    :func:`gerbs_core.mesh.evaluate.evaluate` (the same operations per face; a point's
-    value does not depend on the others evaluated with it). Returns the
-    :func:`_face_terms` it used (their indices into the N points), for
+def _rest_points(model, X, coef, face_ids, x, P0, at):
+    """The surface of positions X (V, 3) and coefficients coef (V, MMAX, 3) (``model.fits(X)``)
+    at the face points ``at`` of (face_ids (N,), layout coordinates x (N, 2)), written into
+    P0[at] (P0 (N, 3)): bit for bit :func:`gerbs_core.mesh.evaluate.evaluate` (the same
+    operations per face; a point's value does not depend on the others evaluated with it).
+    Returns the :func:`_face_terms` it used (their indices into the N points), for
     :func:`point_factors`."""
-    V = model.topology.n_vertices
-    coef = model.fits(X).reshape(V, len(monomial_exponents(4)), -1)
     terms = []
     # faces by their number of such points (within a factor 2), so that a face with a few
     # of them (a strip along a side) is not padded to a whole face's count
@@ -246,8 +244,9 @@ def point_factors(model, face_ids, x, rows, terms=None):
     """E csr (N, len(rows)): the columns ``rows`` (v MMAX + m, sorted) of the stencil's
     factor E (:mod:`gerbs_core.mesh.stencil`) at face points (face_ids (N,), layout
     coordinates x (N, 2)): S = B X + E c, so E[:, rows] maps those coefficients to the
-    points. Only the terms of those rows are made; ``terms``: :func:`_face_terms` of
-    these points if already made."""
+    points. Only the terms of those rows are made; ``terms``: :func:`_face_terms` if
+    already made (:func:`_rest_points`' return); then E has entries only in the rows of
+    the points those terms cover (the others' rows are empty: points no pair reads)."""
     topo = model.topology
     V, mmax = topo.n_vertices, len(monomial_exponents(4))
     col = np.full(V * mmax, -1, dtype=np.int64)
@@ -333,7 +332,8 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     tl, ab = _compact(np.concatenate([A[look], B[look]]), len(T))
     done = np.zeros(len(pts), bool)
     done[T[tl]] = True
-    terms = _rest_points(model, X, face, x, P0, np.flatnonzero(done))
+    coef = model.fits(X).reshape(V, mmax, -1)
+    terms = _rest_points(model, X, coef, face, x, P0, np.flatnonzero(done))
     n0 = _normals(np.ascontiguousarray(P0.T), np.ascontiguousarray(T[tl].T))[0]
     hot = look[_dots(np.take(n0, ab[:len(look)], axis=1),
                      np.take(n0, ab[len(look):], axis=1)) < cos0]
@@ -375,7 +375,7 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     more = np.zeros(len(pts), bool)
     more[T[A[pairs]]] = True
     more[T[B[pairs]]] = True
-    terms += _rest_points(model, X, face, x, P0, np.flatnonzero(more & ~done))
+    terms += _rest_points(model, X, coef, face, x, P0, np.flatnonzero(more & ~done))
     # the factor's columns of the rows on the points they move, scaled to the unknowns z
     Es = point_factors(model, face, x, rows, terms)
     del terms
@@ -496,6 +496,10 @@ class _Penalty:
         self.N = np.empty((3, len(tris)))
         self.N[:, m:] = _normals(np.ascontiguousarray(P0[pts].T),
                                  np.ascontiguousarray(Tl[~mov].T))[0]
+        # the rest points start as NaN where nothing reads them; a pair reading one would
+        # drop out silently (its cosine NaN is never below cos0): refuse it here
+        if not (np.isfinite(self.x0).all() and np.isfinite(self.N[:, m:]).all()):
+            raise AssertionError("fairing: a penalty pair reads a rest point never evaluated")
         self.cos0 = cos0
 
     def _update(self, z):

@@ -32,7 +32,8 @@ def edge_runs(triangles) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def triangle_pairs(triangles) -> tuple[np.ndarray, np.ndarray]:
     """(A, B) the two triangles (T, 3) of every edge shared by exactly two of them: pairs in
     the order of their edges' (lower, higher) corner, A the one whose edge comes first in
-    the order (corners 01 of every triangle, then 12, then 20)."""
+    the order (corners 01 of every triangle, then 12, then 20). Two triangles sharing more
+    than one edge (a doubled triangle) make one pair per shared edge."""
     m = len(triangles)
     order, start, count = edge_runs(triangles)
     two = start[count == 2]

@@ -3,11 +3,12 @@ where the surface turns too sharply between neighbouring lattice triangles, as a
 linear function of the positions (issue 11, the folds of real meshes)."""
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from gerbs_core import BlendingSurface, FairnessRule
 from gerbs_core.datasets import primitives as P
 from gerbs_core.errors import InvalidParameterError
-from gerbs_core.mesh.fairing import FairedFits, turn_penalty
+from gerbs_core.mesh.fairing import FairedFits, _Penalty, turn_penalty
 from gerbs_core.mesh.triangle_edges import triangle_pairs
 from gerbs_core.testing import fold_counts
 
@@ -46,6 +47,48 @@ def test_penalty_gradient_matches_finite_differences():
     bad = G.copy()
     bad[tris[0, 1]] *= -1
     assert np.abs(num - bad).max() > 1e-3 * np.abs(G).max()
+
+
+def test_penalty_of_a_few_moving_points_matches_finite_differences():
+    # the production path: unknowns z (2, 3) move three of nine points through a sparse
+    # factor (one point by both unknowns); the triangles without a moving point keep the
+    # normals of P0, computed once
+    rng = np.random.default_rng(5)
+    pts = rng.normal(size=(9, 3))
+    tris = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4], [3, 5, 4], [1, 6, 3], [6, 7, 3], [7, 8, 3]])
+    a, b = triangle_pairs(tris)
+    E = sp.csr_matrix(([1.0, 0.5, -0.7, 2.0], ([2, 2, 6, 8], [0, 1, 1, 0])), shape=(9, 2))
+    pen = _Penalty(pts, E, tris, a, b, 0.95)
+    assert 0 < pen.m < len(tris)                      # some triangles fixed, some moving
+    z0 = rng.normal(scale=0.1, size=(2, 3))
+    F, G = pen(z0)
+    assert F > 0
+    # the same penalty as on the moved points themselves
+    assert F == pytest.approx(turn_penalty(pts + E @ z0, tris, a, b, 0.95)[0], rel=1e-12)
+    num = np.zeros_like(z0)
+    for i in range(2):
+        for j in range(3):
+            e = np.zeros_like(z0)
+            e[i, j] = 1e-6
+            num[i, j] = (pen(z0 + e)[0] - pen(z0 - e)[0]) / 2e-6
+    assert np.abs(num - G).max() <= 1e-7 * np.abs(G).max()
+    bad = G.copy()
+    bad[1] *= -1                                       # the control: one unknown's sign
+    assert np.abs(num - bad).max() > 1e-3 * np.abs(G).max()
+
+
+def test_components_are_faired_alone():
+    # each ring-1 component is its own region: Suzanne's correction in a mesh of two
+    # Suzannes (the second moved by 5) is hers alone, up to the optimiser's round-off
+    V, F = P.suzanne()
+    alone = BlendingSurface(V, F).model.fits.correction(V)
+    V2 = np.concatenate([V, V + [5.0, 0.0, 0.0]])
+    both = BlendingSurface(V2, [list(f) for f in F] + [[i + len(V) for i in f] for f in F])
+    c = both.model.fits.correction(V2)
+    n = len(alone)
+    assert np.abs(alone).max() > 1.0
+    assert np.abs(c[:n] - alone).max() <= 1e-5 * np.abs(alone).max()
+    assert np.abs(c[n:] - alone).max() <= 1e-5 * np.abs(alone).max()
 
 
 def test_suzanne_folds_go_at_every_resolution(suzanne):
