@@ -376,6 +376,11 @@ def turn_correction(model, X, rings_h, ring1, rule, star, budget: float = 2.0e9)
     more[T[A[pairs]]] = True
     more[T[B[pairs]]] = True
     terms += _rest_points(model, X, coef, face, x, P0, np.flatnonzero(more & ~done))
+    # every point a penalty reads is evaluated now (the rest stay NaN); where the surface
+    # itself is not finite (a cover with holes) a NaN cosine would drop its pair silently:
+    # nothing to fair by, and the surface's own checks report it
+    if not np.isfinite(P0[more | done]).all():
+        return None, len(pts)
     # the factor's columns of the rows on the points they move, scaled to the unknowns z
     Es = point_factors(model, face, x, rows, terms)
     del terms
@@ -496,10 +501,6 @@ class _Penalty:
         self.N = np.empty((3, len(tris)))
         self.N[:, m:] = _normals(np.ascontiguousarray(P0[pts].T),
                                  np.ascontiguousarray(Tl[~mov].T))[0]
-        # the rest points start as NaN where nothing reads them; a pair reading one would
-        # drop out silently (its cosine NaN is never below cos0): refuse it here
-        if not (np.isfinite(self.x0).all() and np.isfinite(self.N[:, m:]).all()):
-            raise AssertionError("fairing: a penalty pair reads a rest point never evaluated")
         self.cos0 = cos0
 
     def _update(self, z):
