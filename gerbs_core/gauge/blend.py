@@ -269,7 +269,7 @@ def overshoot_profile(kernel, n=513, mirrored=False):
     D *= Fhi
     G = np.maximum(0.0, D, out=D).max(axis=1)
     G.setflags(write=False)
-    if len(_G_CACHE) > 32:
-        _G_CACHE.clear()
+    if len(_G_CACHE) >= 32:     # the oldest goes (a full clear dropped the newest too)
+        del _G_CACHE[next(iter(_G_CACHE))]
     _G_CACHE[key] = G
     return G

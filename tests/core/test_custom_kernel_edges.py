@@ -68,3 +68,17 @@ def test_an_unhashable_kernel_gives_the_gauge_of_its_hashable_equivalent():
     assert a.method == b.method
     t = np.linspace(0.0, 7.0, 101)
     np.testing.assert_array_equal(a.u_derivs(t), b.u_derivs(t))
+
+
+def test_the_profile_memo_keeps_its_newest_entries(monkeypatch):
+    # a full memo drops its oldest entry, not every entry: a profile just made is still
+    # memoized after the next one (a full clear made the memo test above depend on which
+    # tests ran before it in the same process)
+    from gerbs_core.gauge import blend
+    monkeypatch.setattr(blend, "_G_CACHE", {})
+    for i in range(32):
+        overshoot_profile(ERBS(lam=0.01 * (i + 1)), n=17)
+    G = overshoot_profile(ERBS(lam=0.5), n=17)
+    overshoot_profile(ERBS(lam=0.6), n=17)
+    assert overshoot_profile(ERBS(lam=0.5), n=17) is G
+    assert len(blend._G_CACHE) == 32
