@@ -1,4 +1,5 @@
-"""Helpers for the Blender tests: test meshes as objects, evaluated positions, rings."""
+"""Helpers for the Blender tests: test meshes as objects, evaluated positions, rings, a
+final render's positions."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -156,3 +157,42 @@ def export_and_reimport(obj, path: Path):
         bpy.ops.wm.obj_import(filepath=str(path))
     (imported,) = [o for o in bpy.data.objects if o.type == "MESH"]
     return imported
+
+
+class _CaptureEngine(bpy.types.RenderEngine):
+    """A render engine that keeps the positions of every mesh object it renders."""
+
+    bl_idname = "GERBS_TEST_CAPTURE"
+    bl_label = "Capture"
+    seen = {}
+
+    def render(self, depsgraph):
+        assert depsgraph.mode == "RENDER"
+        for inst in depsgraph.object_instances:
+            if inst.object.type == "MESH":
+                me = inst.object.data
+                buf = np.empty(3 * len(me.vertices), np.float32)
+                me.attributes["position"].data.foreach_get("vector", buf)
+                type(self).seen[inst.object.name] = buf.reshape(-1, 3)
+        scene = depsgraph.scene
+        result = self.begin_result(0, 0, scene.render.resolution_x, scene.render.resolution_y)
+        self.end_result(result)
+
+
+def final_render() -> dict:
+    """A final render (bpy.ops.render.render, a RENDER depsgraph; a camera is added if the
+    scene has none): {object name: the positions (n, 3) float32 it rendered}."""
+    bpy.utils.register_class(_CaptureEngine)
+    try:
+        scene = bpy.context.scene
+        if scene.camera is None:
+            cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+            scene.collection.objects.link(cam)
+            scene.camera = cam
+        scene.render.engine = _CaptureEngine.bl_idname
+        scene.render.resolution_x = scene.render.resolution_y = 4
+        _CaptureEngine.seen = {}
+        bpy.ops.render.render()
+        return dict(_CaptureEngine.seen)
+    finally:
+        bpy.utils.unregister_class(_CaptureEngine)

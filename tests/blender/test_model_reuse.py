@@ -13,7 +13,7 @@ import bpy
 import numpy as np
 import pytest
 
-from .helpers import evaluated, make_object, modifier_input, topology
+from .helpers import evaluated, final_render, make_object, modifier_input, topology
 
 pytestmark = pytest.mark.blender
 
@@ -46,45 +46,6 @@ def _core_points(obj, X, resolution, **kw):
 def _monkey():
     bpy.ops.mesh.primitive_monkey_add()
     return bpy.context.active_object
-
-
-class _CaptureEngine(bpy.types.RenderEngine):
-    """A render engine that keeps the positions of every mesh object it renders."""
-
-    bl_idname = "GERBS_TEST_CAPTURE"
-    bl_label = "Capture"
-    seen = {}
-
-    def render(self, depsgraph):
-        assert depsgraph.mode == "RENDER"
-        for inst in depsgraph.object_instances:
-            if inst.object.type == "MESH":
-                me = inst.object.data
-                buf = np.empty(3 * len(me.vertices), np.float32)
-                me.attributes["position"].data.foreach_get("vector", buf)
-                type(self).seen[inst.object.name] = buf.reshape(-1, 3)
-        scene = depsgraph.scene
-        result = self.begin_result(0, 0, scene.render.resolution_x, scene.render.resolution_y)
-        self.end_result(result)
-
-
-def _render() -> dict:
-    """A final render (bpy.ops.render.render, a RENDER depsgraph): {object name: the
-    positions it rendered}."""
-    bpy.utils.register_class(_CaptureEngine)
-    try:
-        scene = bpy.context.scene
-        if scene.camera is None:
-            cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-            scene.collection.objects.link(cam)
-            scene.camera = cam
-        scene.render.engine = _CaptureEngine.bl_idname
-        scene.render.resolution_x = scene.render.resolution_y = 4
-        _CaptureEngine.seen = {}
-        bpy.ops.render.render()
-        return dict(_CaptureEngine.seen)
-    finally:
-        bpy.utils.unregister_class(_CaptureEngine)
 
 
 # --- same arguments: reused ----------------------------------------------------------
@@ -129,12 +90,12 @@ def test_a_final_render_reuses_the_viewport_model(blender, rest):
     P2 = evaluated(obj)
     model = _state(obj).model
     built, reused = _counts()
-    seen = _render()[obj.name]
+    seen = final_render()[obj.name]
     assert _state(obj, render=True).model is model and _counts() == (built, reused + 1)
     assert np.array_equal(seen, _core_points(obj, X, 3).astype(np.float32))
     assert len(seen) != len(P2) and np.array_equal(evaluated(obj), P2)  # viewport kept
     api.set_settings(obj, render_resolution=4)
-    seen = _render()[obj.name]
+    seen = final_render()[obj.name]
     assert _state(obj, render=True).model is model and _counts() == (built, reused + 2)
     assert np.array_equal(seen, _core_points(obj, X, 4).astype(np.float32))
     api.set_settings(obj, resolution=4)  # the viewport: the surface the render holds

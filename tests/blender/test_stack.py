@@ -4,7 +4,8 @@ import bpy
 import numpy as np
 import pytest
 
-from .helpers import evaluated, fresh_surface, make_object, modifier_input, positions, topology
+from .helpers import (evaluated, final_render, fresh_surface, make_object, modifier_input,
+                      positions, topology)
 
 pytestmark = pytest.mark.blender
 
@@ -211,43 +212,9 @@ def test_modifiers_above_are_honoured_and_a_blocking_one_is_named(blender):
     assert engine.get_state(obj, mod).n_points == len(P)
 
 
-def _camera():
-    scene = bpy.context.scene
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    scene.collection.objects.link(cam)
-    scene.camera = cam
-
-
-class _CountingEngine(bpy.types.RenderEngine):
-    """A render engine that records the vertex count of every mesh object it renders."""
-
-    bl_idname = "GERBS_TEST_COUNT"
-    bl_label = "Count"
-    counts = {}
-
-    def render(self, depsgraph):
-        assert depsgraph.mode == "RENDER"
-        for inst in depsgraph.object_instances:
-            if inst.object.type == "MESH":
-                type(self).counts[inst.object.name] = len(inst.object.data.vertices)
-        scene = depsgraph.scene
-        result = self.begin_result(0, 0, scene.render.resolution_x, scene.render.resolution_y)
-        self.end_result(result)
-
-
 def _render_counts():
-    bpy.utils.register_class(_CountingEngine)
-    try:
-        scene = bpy.context.scene
-        if scene.camera is None:
-            _camera()
-        scene.render.engine = _CountingEngine.bl_idname
-        scene.render.resolution_x = scene.render.resolution_y = 4
-        _CountingEngine.counts = {}
-        bpy.ops.render.render()
-        return dict(_CountingEngine.counts)
-    finally:
-        bpy.utils.unregister_class(_CountingEngine)
+    """{object name: the vertex count it rendered} in a final render."""
+    return {name: len(P) for name, P in final_render().items()}
 
 
 def test_viewport_and_render_resolution_like_subdivision_levels(blender):
