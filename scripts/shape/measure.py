@@ -12,6 +12,9 @@
   Hxrms, Hxmax, Hxmin  the same from the method's exact derivatives (GERBS)
   box                  (3,) output box extent / cage box extent per axis
   f60, f90, fmax       adjacent output triangle pairs above 60 / 90 degrees, largest
+  zebra                zebra stripes: connected pieces of the reflection-line bands per
+                       environment direction (9 stripes, 24 directions, the vertex
+                       normals; gerbs_core.testing.stripe_components): fewer is fairer
 Curvature region: interior output vertices (every vertex of a closed mesh); for
 inputs with a ``margin`` (height fields) only those at least ``margin`` from the
 domain's boundary in x and y, where no boundary rule acts.
@@ -26,6 +29,7 @@ from gerbs_core.testing import (
     dihedral_angles,
     edge_adjacency,
     observed_order,
+    stripe_components,
     vertex_normals,
 )
 
@@ -59,7 +63,8 @@ def measure(case, out) -> dict:
     row = {"P": len(P), "T": len(T), "orient": int(np.sum(adj["same_direction"])),
            "box": box_ratio(P, case.V),
            "f60": int(np.sum(ang > 60)), "f90": int(np.sum(ang > 90)),
-           "fmax": float(ang.max()) if len(ang) else 0.0}
+           "fmax": float(ang.max()) if len(ang) else 0.0,
+           "zebra": stripe_components(P, T, nd)}
     H, inner = cotangent_mean_curvature(P, T, nd, adj)
     region = inner.copy()
     if case.margin > 0:

@@ -10,10 +10,10 @@ import math
 import numpy as np
 
 COLUMNS = ["input", "method", "V", "P", "dist max", "dist rms", "n° max", "nx° max", "H rms",
-           "H max", "H min", "H p5-95", "Hx rms", "Hx max", "Hx min", "box x/y/z",
+           "H max", "H min", "H p5-95", "Hx rms", "Hx max", "Hx min", "zebra", "box x/y/z",
            ">60/>90/max°"]
 KEYS = ["dmax", "drms", "nmax", "nxmax", "Hrms", "Hmax", "Hmin", "Hspread", "Hxrms", "Hxmax",
-        "Hxmin"]
+        "Hxmin", "zebra"]
 
 
 def num(x) -> str:
@@ -162,11 +162,26 @@ class Verdicts:
                  "Surface level 2 (Suzanne and at least two more), pairs >60/>90: "
                  + "; ".join(p[2] for p in parts))
 
+    def zebra(self):
+        """Issue 11's "zebra on Suzanne and the torus at least as fair as Butterfly's", as
+        the stripes' pieces per direction (measure.py's ``zebra``; fewer is fairer)."""
+        g, names = self.g, ["suzanne", "torus12x8", "torus24x16", "torus48x32"]
+        if not self.have(names[:1], [g, "butterfly"]):
+            return self.missing("zebra", names[:1], [g, "butterfly"])
+        names = [n for n in names if self.have([n], [g, "butterfly"])]
+        z = lambda n, m: self.get(n, m, "zebra")  # noqa: E731
+        parts = [f"{n} {num(z(n, g))} vs {num(z(n, 'butterfly'))}" for n in names]
+        peers = "/".join(num(z("suzanne", m)) for m in ("loop", "catmull-clark"))
+        self.add(all(z(n, g) <= z(n, "butterfly") for n in names),
+                 "zebra stripes in no more pieces than Butterfly's (pieces per direction): "
+                 + "; ".join(parts) + f" (Suzanne: Loop/Catmull-Clark {peers})")
+
     def all(self):
         self.sphere()
         self.torus()
         self.cylinder_cone_cube()
         self.real()
-        self.lines.append("- n/a  zebra stripes (README figures), 'what holds today' (tests, "
+        self.zebra()
+        self.lines.append("- n/a  zebra figures (README, looked at), 'what holds today' (tests, "
                           "bench_surface, bench_blender), the closing note: not measured here")
         return self.lines

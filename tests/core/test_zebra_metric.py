@@ -1,0 +1,68 @@
+"""gerbs_core.testing.stripe_components (zebra stripes as a number): the known answer on a
+sphere, bumps and noise caught, what is not counted, and its errors."""
+import numpy as np
+import pytest
+
+from gerbs_core.datasets.primitives import icosphere
+from gerbs_core.errors import InvalidParameterError
+from gerbs_core.testing import sphere_directions, stripe_components
+
+
+def bumped(V, amp, seed=5, n=6):
+    """The unit sphere's points pushed out by ``n`` Gaussian bumps of height ``amp``."""
+    rng = np.random.default_rng(seed)
+    c = rng.normal(size=(n, 3))
+    c /= np.linalg.norm(c, axis=1, keepdims=True)
+    bump = sum(np.exp(-np.sum((V - ci) ** 2, axis=1) / 0.02) for ci in c)
+    return V * (1.0 + amp * bump)[:, None]
+
+
+def test_directions_are_unit_and_spread():
+    D = sphere_directions(24)
+    assert np.allclose(np.linalg.norm(D, axis=1), 1.0)
+    assert np.linalg.norm(D.mean(axis=0)) < 0.05          # no hemisphere favoured
+    # every pair apart: the closest pair of 24 even points is ~40 degrees apart
+    G = D @ D.T - 2 * np.eye(24)
+    assert np.degrees(np.arccos(G.max())) > 30
+
+
+@pytest.mark.parametrize("stripes, pieces", [(9.0, 10.0), (5.0, 6.0)])
+def test_a_sphere_has_one_piece_per_band(stripes, pieces):
+    """Bands b = floor(s asin(n.a) / pi) from -ceil(s/2) to floor(s/2): two caps and
+    rings, each connected on a fine sphere, for every axis."""
+    V, F = icosphere(4)
+    assert stripe_components(V, F, stripes=stripes) == pieces
+    assert stripe_components(V, F, V, stripes=stripes) == pieces       # exact normals
+
+
+def test_bumps_and_noise_add_pieces():
+    V, F = icosphere(4)
+    # bumps steep enough to make their own extremum of n.a ring themselves with a stripe
+    assert stripe_components(bumped(V, 0.05), F) > 11
+    assert stripe_components(bumped(V, 0.1), F) > stripe_components(bumped(V, 0.05), F) + 3
+    # gentle ones do not (a zebra rendering shows no island either)
+    assert stripe_components(bumped(V, 0.01), F) == 10.0
+    rng = np.random.default_rng(1)
+    # noise of a quarter edge: normals off by ~15 degrees, stripes frayed everywhere
+    assert stripe_components(V * (1 + 1e-2 * rng.normal(size=len(V)))[:, None], F) > 15
+
+
+def test_scale_and_translation_do_not_matter_and_loose_points_are_not_counted():
+    V, F = icosphere(3)
+    W = bumped(V, 0.1)
+    base = stripe_components(W, F)
+    assert stripe_components(7.0 * W + 1.0, F) == base
+    assert stripe_components(np.vstack([W, [[5.0, 5.0, 5.0]]]), F) == base  # in no triangle
+    N = np.array(W)
+    N[:] = np.nan                                              # no finite normal: nothing
+    assert stripe_components(W, F, N) == 0.0
+
+
+@pytest.mark.parametrize("kw, name", [({"stripes": 0.0}, "stripes"), ({"stripes": np.nan}, "stripes"),
+                                      ({"directions": 0}, "directions"),
+                                      ({"directions": 2.5}, "directions"),
+                                      ({"normals": np.zeros((3, 3))}, "normals")])
+def test_bad_arguments_are_named(kw, name):
+    V, F = icosphere(1)
+    with pytest.raises(InvalidParameterError, match=name):
+        stripe_components(V, F, **kw)
