@@ -29,8 +29,10 @@ ends in one ``error: ...`` line on stderr and exit status 2 with nothing written
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
+import re
 import shutil
 import struct
 import sys
@@ -47,6 +49,14 @@ USER_ERROR = 2
 
 class UserError(Exception):
     """A problem with the command line or the files: one line, exit status 2."""
+
+
+def cli_words(text: str) -> str:
+    """A core or add-on message in the command line's words: the settings that have an
+    option here are named by it (``merge_distance`` -> ``--merge-distance``)."""
+    for name in ("merge_distance", "memory_budget"):
+        text = re.sub(rf"(?<![-\w]){name}\b", "--" + name.replace("_", "-"), text)
+    return text
 
 
 class _Parser(argparse.ArgumentParser):
@@ -80,7 +90,16 @@ def parse_args(argv):
                    help="segments per mesh edge, 1..64 (default 4)")
     p.add_argument("--kernel", default="erbs", choices=list(KERNELS),
                    help="how each vertex's patch blends into its neighbours (default erbs)")
-    p.add_argument("--boundary", default="keep", choices=list(ids.BOUNDARIES))
+    p.add_argument("--boundary", default="keep", choices=list(ids.BOUNDARIES),
+                   help="open borders: keep (border vertices keep their corners; a flat "
+                        "mesh stays flat) or straighten (the border runs smoothly through "
+                        "its vertices, corners rounded) (default keep)")
+    p.add_argument("--shading", default="smooth", choices=("smooth", "keep"),
+                   help="smooth: every output face smooth shaded (the surface is smooth; "
+                        "what a viewer shows then follows its vertex normals); keep: each "
+                        "output face shaded like the input face it lies in, as the modifier "
+                        "does in Blender (an OBJ with 's 0' or Blender's Monkey: flat, "
+                        "faceted) (default smooth)")
     for key, (label, spec) in kernel_options().items():
         integer = spec.socket_type == "NodeSocketInt"
         p.add_argument(f"--{key.replace('_', '-')}", type=int if integer else float,
@@ -298,6 +317,23 @@ def mark_creases(bpy, obj, angle=None, sharp=False) -> int:
 
 # --- export ---------------------------------------------------------------------
 
+@contextlib.contextmanager
+def _stdout_silenced():
+    """Blender's exporters print the temporary path they write to ("Writing to
+    .../.gerbs-xyz/out.obj") on the process's standard output: not where the result
+    goes, so not shown (our own lines are on stderr)."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
 def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -> None:
     """Export into a temporary folder beside `out`, then rename every file into
     place (sidecars first); refuse if one would replace a `protected` file. The folder
@@ -315,12 +351,14 @@ def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -
     try:
         target = tmp / out.name
         ext = out.suffix.lower()
-        if ext == ".obj":
-            bpy.ops.wm.obj_export(filepath=str(target), export_selected_objects=True,
-                                  apply_modifiers=True, export_materials=False)
-        else:
-            bpy.ops.export_scene.gltf(filepath=str(target), use_selection=True, export_apply=True,
-                                      export_format="GLB" if ext == ".glb" else "GLTF_SEPARATE")
+        with _stdout_silenced():
+            if ext == ".obj":
+                bpy.ops.wm.obj_export(filepath=str(target), export_selected_objects=True,
+                                      apply_modifiers=True, export_materials=False)
+            else:
+                bpy.ops.export_scene.gltf(filepath=str(target), use_selection=True,
+                                          export_apply=True,
+                                          export_format="GLB" if ext == ".glb" else "GLTF_SEPARATE")
         produced = sorted(tmp.iterdir(), key=lambda p: p.name == out.name)  # main file last
         for p in produced:
             dest = out.parent / p.name
@@ -357,21 +395,27 @@ def run(args, src: Path, out: Path, protected) -> None:
                 n = mark_creases(bpy, obj, args.crease_angle, args.sharp_creases)
                 if not args.quiet:
                     print(f"{obj.name}: {n} edges creased", file=sys.stderr)
+            if args.shading == "smooth":
+                # the imported copy, never the file: its faces' flat shading ("s 0", a
+                # flat-shaded export) would otherwise reach every output face
+                obj.data.shade_smooth()
             if not args.quiet:
                 print(f"{obj.name}: {len(obj.data.vertices)} vertices, "
                       f"{len(obj.data.polygons)} faces", file=sys.stderr)
             try:
                 api.add_surface(obj, progress=silent if args.quiet else text_bar(), **settings)
             except ValueError as exc:
-                raise UserError(f"{obj.name} in {args.input}: {exc}") from None
+                raise UserError(f"{obj.name} in {args.input}: {cli_words(str(exc))}") from None
             info = api.status(obj)
             for warning in info.get("warnings", ()):  # repairs: reported, not errors
-                print(f"warning: {obj.name}: {warning.message}", file=sys.stderr)
+                print(f"warning: {obj.name}: {cli_words(warning.message)}", file=sys.stderr)
             if not args.quiet:
                 print(f"{obj.name}: surface with {info['points']} points, "
                       f"{info['triangles']} triangles in {info['build_seconds']:.2f} s",
                       file=sys.stderr)
         bpy.context.view_layer.update()
+        if not args.quiet:
+            print(f"writing {out} ...", file=sys.stderr)
         export_mesh(bpy, objects, out, protected, make_folder=args.default_output)
     finally:
         blender_addon.unregister()
@@ -379,6 +423,13 @@ def run(args, src: Path, out: Path, protected) -> None:
 
 def main(argv=None) -> int:
     sys.path.insert(0, str(ROOT))
+    try:
+        import bpy  # noqa: F401  (Blender's module: only the project's environment has it)
+    except ImportError:
+        print(f"\nerror: {Path(sys.executable).name} has no Blender 'bpy' module; run this "
+              f"with the project's environment, {ROOT / '.venv' / 'bin' / 'python'} (the "
+              f"README's first command installs it)", file=sys.stderr)
+        return USER_ERROR
     try:
         args = parse_args(sys.argv[1:] if argv is None else argv)
         src, out = check_paths(args)

@@ -221,7 +221,7 @@ HUGE_CUBE = "".join(f"v {x} {y} {z}\n" for x in (-3e38, 3e38) for y in (-3e38, 3
     ("--resolution 0", ["--resolution", "[1, 64]"]), ("--bfbs-left 99", ["--bfbs-left", "[0, 16]"]),
     ("--resolution x", ["invalid int value"]), ("--alpha nan", ["--alpha", "finite"]),
     ("--memory-budget 0", ["--memory-budget"]), ("--merge-distance -1", ["--merge-distance"]),
-    ("--merge-distance 0.5", ["merge_distance", "closer than 0.5 collapsed every face"]),
+    ("--merge-distance 0.5", ["--merge-distance", "closer than 0.5 collapsed every face"]),
     ("--kernel gauss", ["--kernel"]), ("no faces", ["empty"]),
     ("too large", ["memory"]), ("beyond float32", ["surface is not finite", "scale"]),
     ("missing folder", ["its folder", "does not exist", "create it first"]),

@@ -1,0 +1,71 @@
+"""What the command-line job hands a new user (found by a newcomer's walk through the
+README, 2026-12-06): a smooth-shaded result from a flat-shaded input, one error line
+from the wrong Python, messages in the command line's words, no temporary paths."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.blender
+
+ROOT = Path(__file__).resolve().parents[2]
+SCRIPT = ROOT / "scripts" / "gerbs_surface.py"
+SAMPLE = ROOT / "examples" / "suzanne.obj"   # exported flat shaded: "s 0", no normals
+ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+
+
+def run(*args, cwd, python=(sys.executable,)):
+    return subprocess.run([*python, str(SCRIPT), *map(str, args)], cwd=cwd, env=ENV,
+                          capture_output=True, text=True, timeout=300)
+
+
+def shading(path):
+    """(the OBJ's smoothing-group lines, its vertex and normal counts): Blender's OBJ
+    exporter writes "s 1" and one normal per vertex for smooth faces, "s 0" and one normal
+    per face for flat ones."""
+    lines = path.read_text().splitlines()
+    groups = {x for x in lines if x.startswith("s ")}
+    return groups, sum(x.startswith("v ") for x in lines), sum(x.startswith("vn ") for x in lines)
+
+
+def test_a_flat_shaded_input_gives_a_smooth_shaded_surface_unless_kept(tmp_path):
+    assert "s 0" in SAMPLE.read_text().splitlines()           # the sample is flat shaded
+    out = run(SAMPLE, "-o", tmp_path / "s.obj", "--resolution", "2", "--quiet", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    groups, nv, nn = shading(tmp_path / "s.obj")
+    assert groups == {"s 1"} and nn <= nv                       # normals shared at vertices
+    # --shading keep: the input faces' shading, as the modifier carries it in Blender
+    out = run(SAMPLE, "-o", tmp_path / "k.obj", "--resolution", "2", "--quiet",
+              "--shading", "keep", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    groups, nv, nn = shading(tmp_path / "k.obj")
+    assert groups == {"s 0"} and nn > nv                        # one normal per face
+    assert SAMPLE.read_text().count("s 0") == 1                # the input is not written
+
+
+def test_the_wrong_python_gets_one_error_line_naming_the_environment(tmp_path):
+    # -S: no site-packages, so no bpy (as a system Python without the project's environment)
+    out = run(cwd=tmp_path, python=(sys.executable, "-S"))
+    assert out.returncode == 2
+    assert "Traceback" not in out.stderr, out.stderr
+    (line,) = [x for x in out.stderr.splitlines() if x.startswith("error:")]
+    assert "'bpy'" in line and str(ROOT / ".venv" / "bin" / "python") in line
+    assert not (tmp_path / "out").exists()
+
+
+def test_messages_name_the_command_line_options_and_no_temporary_path(tmp_path):
+    out = run(SAMPLE, "-o", tmp_path / "m.obj", "--memory-budget", "1", "--resolution", "40",
+              "--quiet", cwd=tmp_path)
+    assert out.returncode == 2
+    assert "(--memory-budget)" in out.stderr and "memory_budget" not in out.stderr, out.stderr
+    seam = tmp_path / "seam.obj"     # two triangles touching along an unwelded edge
+    seam.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 5 4\n")
+    out = run(seam, "-o", tmp_path / "seam_out.obj", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    (warn,) = [x for x in out.stderr.splitlines() if "open_seam" in x]
+    assert "--merge-distance welds them" in warn
+    # the export's own "Writing to <temporary folder>" is not shown; our line says where
+    assert ".gerbs-" not in out.stdout + out.stderr
+    assert f"writing {tmp_path / 'seam_out.obj'} ..." in out.stderr
