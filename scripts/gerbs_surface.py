@@ -437,12 +437,14 @@ def main(argv=None) -> int:
         protected = [src] + (gltf_references(src) if gltf else [])
         if any(_same_file(out, p) for p in protected if p.exists()):
             raise UserError(f"output {args.output} is a file the input uses; choose another name")
+        existed = out.exists()   # said below: cube.obj and cube.stl share a default name
         run(args, src, out, protected)
     except UserError as exc:
         message = " ".join(str(exc).split())  # one line, whatever the message held
         print(f"\nerror: {message}", file=sys.stderr)
         return USER_ERROR
-    print(f"wrote {out}", file=sys.stderr)
+    print(f"wrote {out}" + (" (it replaces the file there before)" if existed else ""),
+          file=sys.stderr)
     return 0
 
 

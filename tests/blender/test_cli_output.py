@@ -69,3 +69,13 @@ def test_messages_name_the_command_line_options_and_no_temporary_path(tmp_path):
     # the export's own "Writing to <temporary folder>" is not shown; our line says where
     assert ".gerbs-" not in out.stdout + out.stderr
     assert f"writing {tmp_path / 'seam_out.obj'} ..." in out.stderr
+
+
+def test_replacing_an_earlier_output_is_said(tmp_path):
+    """cube.obj and cube.stl both default to out/cube_gerbs.glb: the second run says so."""
+    first = run(SAMPLE, "--resolution", "1", "--quiet", cwd=tmp_path)
+    assert first.returncode == 0 and "replaces" not in first.stderr, first.stderr
+    again = run(SAMPLE, "--resolution", "1", "--quiet", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    out = tmp_path / "out" / "suzanne_gerbs.glb"
+    assert f"wrote {out} (it replaces the file there before)" in again.stderr
