@@ -93,9 +93,10 @@ NOTES = [
     "pairs whose normals differ by more than 60 / 90 degrees, the largest angle; (xq): largest "
     "angle at 2r over that at r; 'order' rows: observed order (least-squares slope of log "
     "figure vs log mean cage edge length)",
-    "- zebra: the pieces the zebra stripes break into, per environment direction (9 stripes, "
-    "24 directions, the output's vertex normals; gerbs_core.testing.stripe_components): fewer "
-    "is fairer at the same output count; a fair sphere 10, a fair torus 18",
+    "- zebra: the pieces the zebra stripes break into per environment direction, those "
+    "covering at least 1e-3 / 1e-4 of the area (the figures' stripe density, 24 directions, the "
+    "output's vertex normals; gerbs_core.testing.stripe_components): fewer is fairer at the "
+    "same output count; a fair sphere 18/18",
 ]
 
 

@@ -425,10 +425,16 @@ def main(argv=None) -> int:
     sys.path.insert(0, str(ROOT))
     try:
         import bpy  # noqa: F401  (Blender's module: only the project's environment has it)
-    except ImportError:
+    except ModuleNotFoundError as exc:
+        if exc.name != "bpy":
+            raise
         print(f"\nerror: {Path(sys.executable).name} has no Blender 'bpy' module; run this "
               f"with the project's environment, {ROOT / '.venv' / 'bin' / 'python'} (the "
               f"README's first command installs it)", file=sys.stderr)
+        return USER_ERROR
+    except ImportError as exc:  # installed, but a library it needs does not load
+        print(f"\nerror: Blender's 'bpy' module does not load: {' '.join(str(exc).split())}",
+              file=sys.stderr)
         return USER_ERROR
     try:
         args = parse_args(sys.argv[1:] if argv is None else argv)

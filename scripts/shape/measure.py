@@ -12,9 +12,10 @@
   Hxrms, Hxmax, Hxmin  the same from the method's exact derivatives (GERBS)
   box                  (3,) output box extent / cage box extent per axis
   f60, f90, fmax       adjacent output triangle pairs above 60 / 90 degrees, largest
-  zebra                zebra stripes: connected pieces of the reflection-line bands per
-                       environment direction (9 stripes, 24 directions, the vertex
-                       normals; gerbs_core.testing.stripe_components): fewer is fairer
+  zebra, zebra_fine    zebra stripes: the pieces the bands break into per environment
+                       direction, those covering at least 1e-3 / 1e-4 of the area (the
+                       figures' stripe density, 24 directions, the vertex normals;
+                       gerbs_core.testing.stripe_components): fewer is fairer
 Curvature region: interior output vertices (every vertex of a closed mesh); for
 inputs with a ``margin`` (height fields) only those at least ``margin`` from the
 domain's boundary in x and y, where no boundary rule acts.
@@ -64,7 +65,8 @@ def measure(case, out) -> dict:
            "box": box_ratio(P, case.V),
            "f60": int(np.sum(ang > 60)), "f90": int(np.sum(ang > 90)),
            "fmax": float(ang.max()) if len(ang) else 0.0,
-           "zebra": stripe_components(P, T, nd)}
+           "zebra": stripe_components(P, T, nd),
+           "zebra_fine": stripe_components(P, T, nd, min_area=1e-4)}
     H, inner = cotangent_mean_curvature(P, T, nd, adj)
     region = inner.copy()
     if case.margin > 0:
