@@ -236,8 +236,8 @@ def main(argv=None) -> int:
     if unknown:
         raise SystemExit(f"error: no wheels are defined for platform {unknown[0]}")
     if args.command == "fetch":
-        for wheel in fetch(args.cache, platforms):
-            print(wheel)
+        wheels = fetch(args.cache, platforms)
+        print(f"{len(wheels)} scipy wheels in {args.cache}", file=sys.stderr)
     else:
         for path in build(args.cache, args.output_dir, platforms):
             print(f"wrote {path} ({path.stat().st_size / 2 ** 20:.1f} MB)")

@@ -8,6 +8,8 @@
 #                   3.11 and 3.13), fetched from the package index here, so
 #                   tests/blender/test_extension.py builds the zips offline
 # Used by the README's first command and by .ci/run.
+# --main-only: .venv alone (the main job, the add-on, the core and most of the tests; about
+# 1.5 GB): no older bpy, no extension wheels (their tests then fail, saying how to fill them).
 # Disk: about 4 GB in all (each bpy wheel is ~0.4 GB to download and 1.1-1.5 GB installed).
 # pip keeps no cache copy of the wheels, and identical files inside a venv (bpy 4.2 ships
 # its shared libraries three times under their version aliases) become hard links.
@@ -35,6 +37,9 @@ fi
 .venv/bin/python -m pip install --quiet --upgrade pip
 .venv/bin/python -m pip install --quiet -e ".[blender,test]"
 compact .venv
+if [ "${1:-}" = "--main-only" ]; then
+    exit 0
+fi
 for spec in "bpy42 bpy==4.2.0" "bpy45 bpy==4.5.15"; do
     set -- $spec
     if [ ! -x ".venvs/$1/bin/python" ]; then
