@@ -64,9 +64,8 @@ def measure(case, out) -> dict:
     row = {"P": len(P), "T": len(T), "orient": int(np.sum(adj["same_direction"])),
            "box": box_ratio(P, case.V),
            "f60": int(np.sum(ang > 60)), "f90": int(np.sum(ang > 90)),
-           "fmax": float(ang.max()) if len(ang) else 0.0,
-           "zebra": stripe_components(P, T, nd),
-           "zebra_fine": stripe_components(P, T, nd, min_area=1e-4)}
+           "fmax": float(ang.max()) if len(ang) else 0.0}
+    row["zebra"], row["zebra_fine"] = stripe_components(P, T, nd, min_area=(1e-3, 1e-4))
     H, inner = cotangent_mean_curvature(P, T, nd, adj)
     region = inner.copy()
     if case.margin > 0:

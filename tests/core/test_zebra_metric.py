@@ -67,6 +67,17 @@ def test_scale_and_translation_do_not_matter_and_bad_points_are_not_counted():
     assert stripe_components(V, np.zeros((0, 3), dtype=int)) == 0.0     # no triangles
 
 
+def test_several_piece_sizes_in_one_pass_equal_one_at_a_time():
+    V, F = icosphere(4)
+    W = bumped(V, 0.1)
+    floors = (1e-3, 1e-4, 0.0)
+    both = stripe_components(W, F, min_area=floors)
+    assert isinstance(both, np.ndarray) and both.shape == (3,)
+    assert both.tolist() == [stripe_components(W, F, min_area=m) for m in floors]
+    assert both[0] <= both[1] <= both[2]                       # a lower floor counts more
+    assert stripe_components(V, np.zeros((0, 3), dtype=int), min_area=floors).tolist() == [0, 0, 0]
+
+
 @pytest.mark.parametrize("kw, name", [({"stripes": 0.0}, "stripes"), ({"stripes": np.nan}, "stripes"),
                                       ({"directions": 0}, "directions"),
                                       ({"directions": 2.5}, "directions"),
@@ -74,6 +85,8 @@ def test_scale_and_translation_do_not_matter_and_bad_points_are_not_counted():
                                       ({"directions": np.inf}, "directions"),
                                       ({"min_area": 1.0}, "min_area"),
                                       ({"min_area": -0.1}, "min_area"),
+                                      ({"min_area": [[1e-3]]}, "min_area"),
+                                      ({"min_area": []}, "min_area"),
                                       ({"normals": np.zeros((3, 3))}, "normals")])
 def test_bad_arguments_are_named(kw, name):
     V, F = icosphere(1)
