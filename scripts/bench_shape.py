@@ -94,7 +94,7 @@ NOTES = [
     "angle at 2r over that at r; 'order' rows: observed order (least-squares slope of log "
     "figure vs log mean cage edge length)",
     "- zebra: the pieces the zebra stripes break into per environment direction, those "
-    "covering at least 1e-3 / 1e-4 of the area (the figures' stripe density, 24 directions, the "
+    "covering at least 1e-3 / 1e-4 of the area (the zebra shader's default stripe density, 24 directions, the "
     "output's vertex normals; gerbs_core.testing.stripe_components): fewer is fairer at the "
     "same output count; a fair sphere 18/18",
 ]

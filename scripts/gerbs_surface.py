@@ -426,8 +426,9 @@ def main(argv=None) -> int:
     try:
         import bpy  # noqa: F401  (Blender's module: only the project's environment has it)
     except ModuleNotFoundError as exc:
-        if exc.name != "bpy":
-            raise
+        if exc.name != "bpy":   # bpy is there, a module it imports is not
+            print(f"\nerror: Blender's 'bpy' module does not load: {exc}", file=sys.stderr)
+            return USER_ERROR
         print(f"\nerror: {Path(sys.executable).name} has no Blender 'bpy' module; run this "
               f"with the project's environment, {ROOT / '.venv' / 'bin' / 'python'} (the "
               f"README's first command installs it)", file=sys.stderr)

@@ -14,6 +14,10 @@
 # pip keeps no cache copy of the wheels, and identical files inside a venv (bpy 4.2 ships
 # its shared libraries three times under their version aliases) become hard links.
 set -euo pipefail
+case "${1:-}" in
+    ""|--main-only) ;;
+    *) echo "scripts/install.sh: unknown option '$1' (the only one is --main-only)" >&2; exit 2 ;;
+esac
 cd "$(dirname "$0")/.."
 export PIP_NO_CACHE_DIR=1
 # Refuse clearly, before pip fails mid-download, when the disk cannot hold one more bpy.

@@ -11,7 +11,8 @@ normal n lies in the band
 
 The figures' shader (scripts/figures/materials.zebra) bands the reflected view ray
 instead, which turns twice as fast as the normal: ``stripes`` = 18 here has the density
-of its default 9 (Suzanne's figure uses 12, i.e. 24 here). The normal makes the count
+of the shader's default 9 (the README figures use 10 to 22 there, i.e. 20 to 44 here; the
+peer figures 10 and 12: 20 and 24 here). The normal makes the count
 independent of a camera. Two mesh vertices joined by a triangle edge and lying in the
 same band are in the same piece. A piece counts if it covers at least ``min_area`` of the
 mesh's area (each vertex carrying a third of its triangles' areas): specks of a few
@@ -65,9 +66,9 @@ def stripe_components(points, triangles, normals=None, *, stripes: float = 18.0,
                       directions: int = 24, min_area=1e-3):
     """Mean number of visible zebra pieces (module docstring) of the mesh.
 
-    points (P, 3), triangles (T, 3) int; normals (P, 3) unit vectors or None (the
+    points (P, 3), triangles (T, 3) int; normals (P, 3) (made unit) or None (the
     angle-weighted vertex normals). Only points of some triangle with finite positions
-    and a unit normal are counted (a degenerate point's zero normal is not). stripes > 0:
+    and a non-zero finite normal are counted (a degenerate point's zero normal is not). stripes > 0:
     bands per half turn of the normal (18: the figures' density); directions >= 1 axes;
     min_area in [0, 1): the fraction of the mesh's area a piece must cover to count
     (0: every piece), or a list of such fractions (one pass for all). Returns the mean
@@ -86,12 +87,17 @@ def stripe_components(points, triangles, normals=None, *, stripes: float = 18.0,
     N = vertex_normals(P, T) if normals is None else N
     live = np.zeros(len(P), dtype=bool)
     live[T.reshape(-1)] = True
-    with np.errstate(invalid="ignore"):
-        live &= np.isfinite(P).all(axis=1) & (np.einsum("ij,ij->i", N, N) > 0.25)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        length = np.sqrt(np.einsum("ij,ij->i", N, N))
+        # given normals of any length are made unit; a zero one (a degenerate point's
+        # vertex normal) is not a direction and the point is not counted
+        live &= np.isfinite(P).all(axis=1) & np.isfinite(length) & (length > 1e-12)
+        N = N / length[:, None]
     n = int(live.sum())
     if n == 0:
         return zero
-    ids = np.cumsum(live) - 1                      # the counted points, renumbered
+    ids = np.cumsum(live, dtype=np.int64) - 1      # the counted points, renumbered (int64:
+    # the edge keys below are a n + b)
     _, tri_area = triangle_normals(P, T)
     tri_area = np.where(np.isfinite(tri_area), tri_area, 0.0)
     area = np.bincount(T.reshape(-1), np.repeat(tri_area / 3.0, 3), minlength=len(P))[live]

@@ -14,7 +14,7 @@
   f60, f90, fmax       adjacent output triangle pairs above 60 / 90 degrees, largest
   zebra, zebra_fine    zebra stripes: the pieces the bands break into per environment
                        direction, those covering at least 1e-3 / 1e-4 of the area (the
-                       figures' stripe density, 24 directions, the vertex normals;
+                       zebra shader's default density, 24 directions, the vertex normals;
                        gerbs_core.testing.stripe_components): fewer is fairer
 Curvature region: interior output vertices (every vertex of a closed mesh); for
 inputs with a ``margin`` (height fields) only those at least ``margin`` from the

@@ -55,6 +55,18 @@ def test_the_wrong_python_gets_one_error_line_naming_the_environment(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+def test_a_bpy_that_does_not_load_says_so(tmp_path):
+    fake = tmp_path / "fake"
+    fake.mkdir()
+    (fake / "bpy.py").write_text("import a_library_bpy_needs_xyz\n")  # bpy there, its need not
+    env = {**ENV, "PYTHONPATH": str(fake)}
+    out = subprocess.run([sys.executable, "-S", str(SCRIPT)], cwd=tmp_path, env=env,
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    (line,) = [x for x in out.stderr.splitlines() if x.startswith("error:")]
+    assert "'bpy' module does not load" in line and "a_library_bpy_needs_xyz" in line
+
+
 def test_messages_name_the_command_line_options_and_no_temporary_path(tmp_path):
     out = run(SAMPLE, "-o", tmp_path / "m.obj", "--memory-budget", "1", "--resolution", "40",
               "--quiet", cwd=tmp_path)

@@ -67,6 +67,34 @@ def test_scale_and_translation_do_not_matter_and_bad_points_are_not_counted():
     assert stripe_components(V, np.zeros((0, 3), dtype=int)) == 0.0     # no triangles
 
 
+def _turning(a, d):
+    """A rotation (3, 3) taking unit vector a to unit vector d (Rodrigues)."""
+    v, c = np.cross(a, d), float(np.dot(a, d))
+    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + K + K @ K / (1.0 + c)
+
+
+def test_the_figure_is_the_mean_over_the_directions():
+    """Turning the mesh so that each of the 24 directions becomes the single direction of
+    directions=1, and averaging those counts, gives the 24-direction figure."""
+    V, F = icosphere(3)
+    W = bumped(V, 0.1)
+    (d,) = sphere_directions(1)
+    one = [stripe_components(W @ _turning(a, d).T, F, directions=1) for a in sphere_directions(24)]
+    assert len(set(one)) > 1                                   # the directions differ here
+    assert np.mean(one) == pytest.approx(stripe_components(W, F), abs=0.1)
+
+
+def test_given_normals_of_any_length_count_as_their_directions():
+    V, F = icosphere(3)
+    W = bumped(V, 0.1)
+    from gerbs_core.testing import vertex_normals
+    N = vertex_normals(W, F)
+    base = stripe_components(W, F, N)
+    assert base == stripe_components(W, F)
+    assert stripe_components(W, F, 0.6 * N) == base == stripe_components(W, F, 3.0 * N)
+
+
 def test_several_piece_sizes_in_one_pass_equal_one_at_a_time():
     V, F = icosphere(4)
     W = bumped(V, 0.1)
