@@ -1,6 +1,7 @@
 """One build of a surface through gerbs_core, and writing it into a result object.
 
-:func:`build_surface` runs the core on a :class:`mesh_io.MeshInput` and returns a
+:func:`surface_arguments`, :func:`make_model` and :func:`evaluate` run the core on a
+:class:`mesh_io.MeshInput` (engine._rebuild calls them in turn) and return a
 :class:`Built`: the output points, the lattice (its polygons are the output faces:
 quads in quad faces, triangles elsewhere), the stencil (``points = stencil.apply(X)``,
 the fast path of later edits; None with Hermite normals, whose surface is not
@@ -166,15 +167,6 @@ def evaluate(model: Model, arguments: dict, resolution: int, progress) -> Built:
     progress(0.35, "building stencil")
     stencil = surface.stencil(resolution)
     return Built(stencil.apply(X), stencil.lattice, stencil, stencil, surface)
-
-
-def build_surface(settings: dict, inp, resolution: int, progress, creases=None,
-                  rest=None, held=()) -> Built:
-    """The surface of `inp` with `settings` at `resolution` (raises GERBSError); `creases`,
-    `rest`: :func:`surface_arguments`; `held`: models it may reuse (:func:`make_model`)."""
-    arguments = surface_arguments(settings, inp, creases, rest)
-    progress(0.05, "building surface")
-    return evaluate(make_model(arguments, held), arguments, resolution, progress)
 
 
 def write_geometry(mesh, built: Built, previous: Transfer | None, inp) -> Transfer:
