@@ -36,6 +36,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..errors import InvalidParameterError
+from ..mesh.triangle_edges import edge_runs
 from .fairness import _mesh, triangle_normals, vertex_normals
 
 __all__ = ["sphere_directions", "stripe_components"]
@@ -96,16 +97,17 @@ def stripe_components(points, triangles, normals=None, *, stripes: float = 18.0,
     n = int(live.sum())
     if n == 0:
         return zero
-    ids = np.cumsum(live, dtype=np.int64) - 1      # the counted points, renumbered (int64:
-    # the edge keys below are a n + b)
+    ids = np.cumsum(live, dtype=np.int64) - 1      # the counted points, renumbered
     _, tri_area = triangle_normals(P, T)
     tri_area = np.where(np.isfinite(tri_area), tri_area, 0.0)
     area = np.bincount(T.reshape(-1), np.repeat(tri_area / 3.0, 3), minlength=len(P))[live]
     need = np.atleast_1d(floors) * area.sum()
-    e = np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]])
+    # each edge once (its first half-edge in the sorted runs): half the work below
+    order, start, _ = edge_runs(T)
+    h = order[start]
+    tri, corner = h % len(T), h // len(T)
+    e = np.stack([T[tri, corner], T[tri, (corner + 1) % 3]], axis=1)
     e = ids[e[live[e].all(axis=1)]]
-    key = np.unique(np.minimum(e[:, 0], e[:, 1]) * n + np.maximum(e[:, 0], e[:, 1]))
-    e = np.stack([key // n, key % n], axis=1)      # each edge once (half the work below)
     Nl = N[live]
     counts = np.zeros((nd, len(need)))
     for i, a in enumerate(sphere_directions(nd)):
