@@ -425,17 +425,14 @@ def main(argv=None) -> int:
     sys.path.insert(0, str(ROOT))
     try:
         import bpy  # noqa: F401  (Blender's module: only the project's environment has it)
-    except ModuleNotFoundError as exc:
-        if exc.name != "bpy":   # bpy is there, a module it imports is not
-            print(f"\nerror: Blender's 'bpy' module does not load: {exc}", file=sys.stderr)
-            return USER_ERROR
-        print(f"\nerror: {Path(sys.executable).name} has no Blender 'bpy' module; run this "
-              f"with the project's environment, {ROOT / '.venv' / 'bin' / 'python'} (the "
-              f"README's first command installs it)", file=sys.stderr)
-        return USER_ERROR
-    except ImportError as exc:  # installed, but a library it needs does not load
-        print(f"\nerror: Blender's 'bpy' module does not load: {' '.join(str(exc).split())}",
-              file=sys.stderr)
+    except ImportError as exc:
+        if isinstance(exc, ModuleNotFoundError) and exc.name == "bpy":
+            print(f"\nerror: {Path(sys.executable).name} has no Blender 'bpy' module; run this "
+                  f"with the project's environment, {ROOT / '.venv' / 'bin' / 'python'} (the "
+                  f"README's first command installs it)", file=sys.stderr)
+        else:  # bpy is there, but a module or library it needs does not load
+            print(f"\nerror: Blender's 'bpy' module does not load: {' '.join(str(exc).split())}",
+                  file=sys.stderr)
         return USER_ERROR
     try:
         args = parse_args(sys.argv[1:] if argv is None else argv)
