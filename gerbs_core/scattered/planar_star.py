@@ -152,6 +152,7 @@ class PlanarStarCover:
         den += a0y * fy
         den += 0.0
         self.nu = np.arctan2(num, den, out=num)
+        self._foot = (fx, fy)          # (for the lines' gauge vectors, :meth:`_subdivide`)
 
     @property
     def a0(self):
@@ -200,6 +201,12 @@ class PlanarStarCover:
                 "offending points", np.unique(self.edge_star[bad]))
         # the amplitude 1 / (shrink c p) of each edge's pulled-in line, once per edge
         self._line_scale = 1.0 / (self.shrink * self.c * self.p)
+        # r u_e = r cos(t - nu_e) / (shrink c_e p_e) is linear in y: y . line_vec_e, with
+        # line_vec_e the foot direction foot_e / p_e over shrink c_e p_e (:meth:`_gauge_values`)
+        fx, fy = self._foot
+        del self._foot
+        s = self._line_scale / self.p
+        self._line_vec = np.stack([fx * s, fy * s])                            # (2, E)
         self._sides = self._side_tables() if E <= _TABLE_EDGES and not self.exact else None
         # rho is convex on each edge: its max is at a corner, and rho~ <= rho
         self.support_radius = np.zeros(len(self.centers))
@@ -232,17 +239,27 @@ class PlanarStarCover:
         * row E + e: the transition from the previous edge g (line g -> line e).
 
         Per row: line A (amplitude sA, angle mA, offset oA: evaluated at t - oA), line B
-        (sB, mB, oB), the width and w2 (w = (t - oB + w2) / width): t - (-d) is t + d
+        (sB, mB, oB), the width and w2 (w = (t - oB + w2) / width), the lines' gauge
+        vectors (ax, ay), (bx, by): t - (-d) is t + d
         to the bit, t - 0.0 is t, so every value is the direct formula's. thr_left /
         thr_right (per edge): the transitions' bounds L_e and delta_e - R_e (-inf / inf
-        at an open star's ends). 16 floats per edge, ~65 ns per edge to build: worth it
+        at an open star's ends). 24 floats per edge, ~65 ns per edge to build: worth it
         when the queries' (point, star) pairs outnumber the edges, so only for covers
         of up to _TABLE_EDGES edges (the direct formula otherwise, same bits)."""
         g, f = self.prev_edge, self.next_edge
         gs, fs = np.maximum(g, 0), np.maximum(f, 0)
         ls, m, d, R, L = self._line_scale, self.nu, self.delta, self.R, self.L
-        T = np.empty((8, 2, len(d)))
-        sA, mA, oA, sB, mB, oB, width, w2 = T
+        names = ("sA", "mA", "oA", "sB", "mB", "oB", "width", "w2", "ax", "ay", "bx", "by")
+        T = np.empty((len(names), 2, len(d)))
+        sA, mA, oA, sB, mB, oB, width, w2, ax, ay, bx, by = T
+        # the two lines' gauge vectors (:meth:`_gauge_values`): copies, so the same bits
+        # as the direct formula's gathers
+        vx, vy = self._line_vec
+        ax[0], ay[0], bx[1], by[1] = vx, vy, vx, vy
+        np.take(vx, gs, out=ax[1])
+        np.take(vy, gs, out=ay[1])
+        np.take(vx, fs, out=bx[0])
+        np.take(vy, fs, out=by[0])
         sA[0], mA[0], sB[1], mB[1], oB[0], w2[0] = ls, m, ls, m, d, R
         oA[0], oB[1] = 0.0, 0.0
         np.take(ls, gs, out=sA[1])
@@ -255,7 +272,7 @@ class PlanarStarCover:
         np.add(np.take(R, gs, out=w2[1]), L, out=width[1])
         self._thr_left = np.where(g >= 0, L, -np.inf)
         self._thr_right = np.where(f >= 0, d - R, np.inf)
-        return dict(zip(("sA", "mA", "oA", "sB", "mB", "oB", "width", "w2"), T.reshape(8, -1)))
+        return dict(zip(names, T.reshape(len(names), -1)))
 
     def measured_kappa(self, per_edge=16):
         """min of rho~ / (shrink rho) on a uniform sample of angles of every edge."""
@@ -278,7 +295,20 @@ class PlanarStarCover:
         if self.exact:
             return line_jet(1.0 / (self.shrink * self.p[e]), self.nu[e], None, t, nu)
         if self._sides is not None:
-            return self._u_tilde_rows(e, t, nu)
+            k, ta, tb, rise = self._rows_rise(e, t, nu)
+            S = self._sides
+            A = line_jet(S["sA"][k], S["mA"][k], None, ta, nu)
+            B = line_jet(S["sB"][k], S["mB"][k], None, tb, nu)
+        else:
+            ia, ib, ta, tb, rise = self._direct_rise(e, t, nu)
+            A = line_jet(self._line_scale[ia], self.nu[ia], None, ta, nu)
+            B = line_jet(self._line_scale[ib], self.nu[ib], None, tb, nu)
+        return blend_jet(A, B, rise, nu)
+
+    def _direct_rise(self, e, t, nu):
+        """The corner transition at angle t (*S) of edge e (*S), by the direct formula:
+        the edges of the two lines ia, ib, their angles ta, tb and the rising jet
+        (nu + 1, *S) of the blend (0 between transitions)."""
         g, f = self.prev_edge[e], self.next_edge[e]
         Le, Re, de = self.L[e], self.R[e], self.delta[e]       # each gathered once
         left = (g >= 0) & (t < Le)
@@ -291,23 +321,38 @@ class PlanarStarCover:
         w = np.where(left, (t + Ra) / width,
                      np.where(right, (t - de + Re) / width, 0.0))
         rise = rising_jet(self.kernel, np.clip(w, 0.0, 1.0), width, nu)
-        rise = np.where(left | right, rise, 0.0)
-        A = line_jet(self._line_scale[ia], self.nu[ia], None, ta, nu)
-        B = line_jet(self._line_scale[ib], self.nu[ib], None, tb, nu)
-        return blend_jet(A, B, rise, nu)
+        return ia, ib, ta, tb, np.where(left | right, rise, 0.0)
 
-    def _u_tilde_rows(self, e, t, nu):
-        """:meth:`u_tilde` from the rows of :meth:`_side_tables` (the same bits)."""
+    def _rows_rise(self, e, t, nu):
+        """:meth:`_direct_rise` from the rows of :meth:`_side_tables` (the same bits): the
+        row k (*S) instead of the two edges."""
         left = t < self._thr_left[e]
         right = (t > self._thr_right[e]) & ~left
         k = e + len(self.delta) * left                     # the row
         S = self._sides
         width, tb = S["width"][k], t - S["oB"][k]
         rise = rising_jet(self.kernel, np.clip((tb + S["w2"][k]) / width, 0.0, 1.0), width, nu)
-        rise = np.where(left | right, rise, 0.0)
-        A = line_jet(S["sA"][k], S["mA"][k], None, t - S["oA"][k], nu)
-        B = line_jet(S["sB"][k], S["mB"][k], None, tb, nu)
-        return blend_jet(A, B, rise, nu)
+        return k, t - S["oA"][k], tb, np.where(left | right, rise, 0.0)
+
+    def _gauge_values(self, e, t, y0, y1):
+        """The smooth gauge g = r u~ (values only) at offsets y = (y0, y1) (*S) from the
+        centre, at angle t (*S) of edge e (*S) (not ``exact``).
+
+        Each line's r u_e = r cos(t - nu_e) / (shrink c_e p_e) is linear in y, y . line_vec_e,
+        so the blend (1 - F) r u_A + F r u_B needs no cosines (and no r): the same
+        values as r :meth:`u_tilde` up to rounding."""
+        if self._sides is not None:
+            k, _, _, rise = self._rows_rise(e, t, 0)
+            S = self._sides
+            gA = y0 * S["ax"][k] + y1 * S["ay"][k]
+            gB = y0 * S["bx"][k] + y1 * S["by"][k]
+        else:
+            ia, ib, _, _, rise = self._direct_rise(e, t, 0)
+            vx, vy = self._line_vec
+            gA = y0 * vx[ia] + y1 * vy[ia]
+            gB = y0 * vx[ib] + y1 * vy[ib]
+        F = rise[0]
+        return (1.0 - F) * gA + F * gB
 
     def rho_tilde(self, e, t, nu=0):
         """The smooth radius rho~ (after shrink) on edge e at angle t in [0, delta_e],
@@ -370,8 +415,11 @@ class PlanarStarCover:
             c = self.edge_star[e]
             y0, y1 = x[rows, 0] - cx[c], x[rows, 1] - cy[c]
             put = (rows, cols)
+        fast = nu == 0 and not self.exact     # values: the gauge without r (_gauge_values)
         if nu >= 1:
             r_jet, t_jet = polar_jet(np.stack([y0, y1], -1), nu)
+        elif fast:               # (only r > 0 is needed: r^2 > 0 alike, NaN included)
+            r_jet, t_jet = [y0 * y0 + y1 * y1], [None]
         else:                    # values: the edge angle below is the only angle needed
             r_jet, t_jet = [np.hypot(y0, y1)], [None]
         r = r_jet[0]
@@ -382,8 +430,17 @@ class PlanarStarCover:
         de = self.delta[e]
         inside = (t >= -1e-12) & (t <= de + 1e-12)
         t_jet[0] = np.clip(t, 0.0, de)      # the edge's angle: theta - const
-        jet = bump_jet(self.kernel, star_gauge_jet(r_jet, t_jet, self.u_tilde(e, t_jet[0], nu),
-                                                   nu), nu)
+        if fast:
+            g = self._gauge_values(e, t_jet[0], y0, y1)
+            # where t was clipped (within 1e-12 of the sector) y's direction is not the
+            # angle's: there r u~(clipped t), as below (at hull edges: 1e-13 of B otherwise)
+            off = np.flatnonzero(t != t_jet[0])
+            if off.size:
+                g[off] = np.hypot(y0[off], y1[off]) * self.u_tilde(e[off], t_jet[0][off], 0)[0]
+            jet = bump_jet(self.kernel, [g], 0)
+        else:
+            jet = bump_jet(self.kernel, star_gauge_jet(r_jet, t_jet, self.u_tilde(e, t_jet[0], nu),
+                                                       nu), nu)
         v[put] = np.where(inside, jet[0], 0.0)
         live = inside & (r > 0)      # (beyond g = 1 the bump's derivatives are exactly 0)
         if nu >= 1:

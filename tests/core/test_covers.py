@@ -304,3 +304,24 @@ def test_non_finite_queries_give_nan_quietly_on_every_cover(cover):
             assert np.isnan(out[:3]).all()
             np.testing.assert_array_equal(out[3:], interp(Q[3:], nu=nu))
             assert np.isfinite(out[3:]).all()
+
+
+@pytest.mark.parametrize("direct", [False, True])
+def test_psi_values_without_cosines_equal_the_jet_path(direct, monkeypatch):
+    """psi values (nu = 0) take the lines' gauges as y . line_vec (no cosines, no r);
+    the derivative path's r u~(t) gives the same values to rounding, on the row tables
+    and on the direct formula, outside the hull and on hull slivers included."""
+    import gerbs_core.scattered.planar_star as ps
+    if direct:
+        monkeypatch.setattr(ps, "_TABLE_EDGES", 0)
+    rng = np.random.default_rng(8)
+    P = np.concatenate([rng.random((500, 2)), 0.3 + 0.02 * rng.standard_normal((300, 2)),
+                        [[0, 0], [1, 0], [0, 1], [1, 1]]])
+    interp = GERBSInterpolator(P, f(P))
+    g = np.linspace(0.0, 1.0, 60)
+    x = np.concatenate([np.stack(np.meshgrid(g, g), -1).reshape(-1, 2),
+                        rng.uniform(-0.1, 1.1, (2000, 2))])
+    idx, edge = interp._candidates(x)
+    v0 = interp.cover.psi_jet(x, idx, edge, 0)[0]
+    v1 = interp.cover.psi_jet(x, idx, edge, 1)[0]
+    assert np.max(np.abs(v0 - v1)) <= 1e-12
