@@ -152,7 +152,6 @@ class PlanarStarCover:
         den += a0y * fy
         den += 0.0
         self.nu = np.arctan2(num, den, out=num)
-        self._foot = (fx, fy)          # (for the lines' gauge vectors, :meth:`_subdivide`)
 
     @property
     def a0(self):
@@ -201,12 +200,6 @@ class PlanarStarCover:
                 "offending points", np.unique(self.edge_star[bad]))
         # the amplitude 1 / (shrink c p) of each edge's pulled-in line, once per edge
         self._line_scale = 1.0 / (self.shrink * self.c * self.p)
-        # r u_e = r cos(t - nu_e) / (shrink c_e p_e) is linear in y: y . line_vec_e, with
-        # line_vec_e the foot direction foot_e / p_e over shrink c_e p_e (:meth:`_gauge_values`)
-        fx, fy = self._foot
-        del self._foot
-        s = self._line_scale / self.p
-        self._line_vec = np.stack([fx * s, fy * s])                            # (2, E)
         self._sides = self._side_tables() if E <= _TABLE_EDGES and not self.exact else None
         # rho is convex on each edge: its max is at a corner, and rho~ <= rho
         self.support_radius = np.zeros(len(self.centers))
@@ -254,7 +247,7 @@ class PlanarStarCover:
         sA, mA, oA, sB, mB, oB, width, w2, ax, ay, bx, by = T
         # the two lines' gauge vectors (:meth:`_gauge_values`): copies, so the same bits
         # as the direct formula's gathers
-        vx, vy = self._line_vec
+        vx, vy = self._line_vectors(np.arange(len(d)))
         ax[0], ay[0], bx[1], by[1] = vx, vy, vx, vy
         np.take(vx, gs, out=ax[1])
         np.take(vy, gs, out=ay[1])
@@ -338,7 +331,7 @@ class PlanarStarCover:
         """The smooth gauge g = r u~ (values only) at offsets y = (y0, y1) (*S) from the
         centre, at angle t (*S) of edge e (*S) (not ``exact``).
 
-        Each line's r u_e = r cos(t - nu_e) / (shrink c_e p_e) is linear in y, y . line_vec_e,
+        Each line's r u_e = r cos(t - nu_e) / (shrink c_e p_e) is linear in y (:meth:`_line_vectors`),
         so the blend (1 - F) r u_A + F r u_B needs no cosines (and no r): the same
         values as r :meth:`u_tilde` up to rounding."""
         if self._sides is not None:
@@ -348,11 +341,22 @@ class PlanarStarCover:
             gB = y0 * S["bx"][k] + y1 * S["by"][k]
         else:
             ia, ib, _, _, rise = self._direct_rise(e, t, 0)
-            vx, vy = self._line_vec
-            gA = y0 * vx[ia] + y1 * vy[ia]
-            gB = y0 * vx[ib] + y1 * vy[ib]
+            (ax, ay), (bx, by) = self._line_vectors(ia), self._line_vectors(ib)
+            gA = y0 * ax + y1 * ay
+            gB = y0 * bx + y1 * by
         F = rise[0]
         return (1.0 - F) * gA + F * gB
+
+    def _line_vectors(self, e):
+        """(vx, vy) (*S) of edges e (*S): r u_e = r cos(t - nu_e) / (shrink c_e p_e) = y . v_e,
+        v_e the foot of the edge's line over p_e times its amplitude. Per queried edge (the
+        same formula for the row tables and the direct path: the same bits), so that no
+        (E,) array is built with the cover (large covers query a few of their edges)."""
+        a0x, a0y, a1x, a1y = self._a0t[0][e], self._a0t[1][e], self._a1t[0][e], self._a1t[1][e]
+        ex, ey = a1x - a0x, a1y - a0y
+        t = -(a0x * ex + a0y * ey) / (ex * ex + ey * ey)
+        s = self._line_scale[e] / self.p[e]
+        return (a0x + t * ex) * s, (a0y + t * ey) * s
 
     def rho_tilde(self, e, t, nu=0):
         """The smooth radius rho~ (after shrink) on edge e at angle t in [0, delta_e],
