@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 from .arrays import ranges
-from .agreement import MMAX, face_sharpness, fair_fits
+from .agreement import MMAX, fair_fits, tension_weights
 from .charts import vertex_charts
 from .cover import star_cover
 from .crease_fits import corner_scales, curve_constraints
@@ -145,7 +145,7 @@ def build_model(topo, rest, cut, kernel, boundary, fairness, kappa, shrink, exac
     the construction is checked against (:func:`gerbs_core.mesh.memory.check_build`)."""
     mtopo, mrest = cut.topology, cut.positions(rest)
     layouts = face_layouts(mtopo, mrest)
-    sharp = cut.sharpness(face_sharpness(topo, rest, fairness.sharp_from, fairness.sharp_to))
+    sharp = cut.sharpness(tension_weights(topo, rest, fairness))
     scale = corner_scales(cut, layouts.angles, rest, cut.chart_scales(layouts.angles))
     charts = vertex_charts(mtopo, layouts.corners, layouts.angles, boundary, scale)
     cover = star_cover(mtopo, charts, layouts.corners, kernel, kappa, shrink, exact_gauge,

@@ -1,0 +1,122 @@
+"""Fillet sides (gerbs_core.mesh.fillets): wide faces beside a bevelled edge get the tension.
+
+The test meshes are tubes extruded from a square profile whose corners are rounded by
+quarter circles of 1, 2 or 4 segments (a bevelled box's cross-section), and controls:
+the same tube with sharp corners, a regular 16-gon tube and meshes without bevels.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gerbs_core import BlendingSurface, FairnessRule
+from gerbs_core.datasets import primitives
+from gerbs_core.errors import InvalidParameterError
+from gerbs_core.mesh import MeshTopology
+from gerbs_core.mesh import fillets
+from gerbs_core.mesh.fillets import fillet_sides
+
+NO_FILLET = FairnessRule(fillet=0.0)
+
+
+def rounded_square(segments: int, radius: float = 0.2) -> np.ndarray:
+    """(n, 2) the profile (x, z) of the square [-1, 1]^2 with its corners rounded by
+    quarter circles of ``radius`` in ``segments`` chords, counter-clockwise."""
+    pts = []
+    for (sx, sz), a0 in (((1, 1), 0.0), ((-1, 1), 90.0), ((-1, -1), 180.0), ((1, -1), 270.0)):
+        for j in range(segments + 1):
+            a = np.radians(a0 + 90.0 * j / segments)
+            pts.append(((1 - radius) * sx + radius * np.cos(a), (1 - radius) * sz + radius * np.sin(a)))
+    return np.array(pts)
+
+
+def tube(profile, half_length: float = 1.0):
+    """(V, F): the profile (n, 2) extruded along y over [-half_length, half_length], one
+    row of n quads (open at both ends)."""
+    n = len(profile)
+    V = np.array([(x, y, z) for y in (-half_length, half_length) for x, z in profile])
+    F = [(i, (i + 1) % n, n + (i + 1) % n, n + i) for i in range(n)]
+    return V, F
+
+
+def weights(V, F):
+    return fillet_sides(MeshTopology(F, len(V)), V)
+
+
+@pytest.mark.parametrize("segments", [2, 4])
+def test_the_flat_sides_of_a_bevelled_tube_are_fillet_sides(segments):
+    V, F = tube(rounded_square(segments))
+    w = weights(V, F)
+    # face i joins profile points i and i + 1: the flat sides are the last face of every
+    # corner's arc block (its last point to the next corner's first)
+    flat = np.arange(4) * (segments + 1) + segments
+    assert np.array_equal(np.flatnonzero(w > 0), flat)
+    assert np.allclose(w[flat], 1.0)
+
+
+@pytest.mark.parametrize("profile", [
+    np.array([(1, 1), (-1, 1), (-1, -1), (1, -1.0)]),                      # sharp corners
+    np.stack([np.cos(a := np.linspace(0, 2 * np.pi, 17)[:-1]), np.sin(a)], 1),  # regular
+    rounded_square(1),     # chamfers: the strip is only 2.4x smaller than the sides
+], ids=["square", "16-gon", "chamfered"])
+def test_no_fillet_sides_where_no_turn_is_concentrated(profile):
+    V, F = tube(profile)
+    assert not weights(V, F).any()
+
+
+@pytest.mark.parametrize("mesh", [lambda: primitives.icosphere(2), lambda: primitives.cylinder(),
+                                  lambda: primitives.torus(12, 8, 1.0, 0.4)],
+                         ids=["icosphere", "cylinder", "torus"])
+def test_meshes_without_fillet_sides_build_the_same_surface(mesh):
+    V, F = mesh()
+    assert not weights(V, F).any()
+    a = BlendingSurface(V, F).tessellate(4)[0]
+    b = BlendingSurface(V, F, fairness=NO_FILLET).tessellate(4)[0]
+    assert np.array_equal(a, b)
+
+
+def test_turns_above_top_are_not_roundings(monkeypatch):
+    # the 2-segment tube's counted turns are 67.5 degrees (the second chord against the
+    # side); below TOP they count, above it they do not
+    V, F = tube(rounded_square(2))
+    monkeypatch.setattr(fillets, "TOP", 70.0)
+    assert weights(V, F).max() == 1.0
+    monkeypatch.setattr(fillets, "TOP", 60.0)
+    assert not weights(V, F).any()
+
+
+def test_a_turn_near_one_edge_in_four_is_not_enough(monkeypatch):
+    # the flat sides have turns near 2 of their 4 edges (the other two are the tube's
+    # open ends): enough at COVER 0.5, not at 0.75
+    V, F = tube(rounded_square(2))
+    monkeypatch.setattr(fillets, "COVER", 0.75)
+    assert not weights(V, F).any()
+
+
+@pytest.mark.parametrize("segments, bound, control", [(2, 1.05, 1.15), (4, 1.03, 1.09)])
+def test_a_bevelled_tube_keeps_its_flat_sides(segments, bound, control):
+    """Measured: the surface's largest |x|, |z| over the tube's inner part (|y| < 0.9, away
+    from the open ends) is 1.034 / 1.019 with the fillet sides' tension and 1.183 / 1.107
+    without (the cage's 1): the sides balloon without it."""
+    V, F = tube(rounded_square(segments))
+
+    def bulge(rule):
+        P = BlendingSurface(V, F, fairness=rule).tessellate(8)[0]
+        return np.abs(P[np.abs(P[:, 1]) < 0.9][:, [0, 2]]).max()
+
+    assert bulge(None) < bound
+    assert bulge(NO_FILLET) > control
+
+
+@pytest.mark.parametrize("value", [-1.0, float("nan"), float("inf")])
+def test_fillet_weight_is_checked(value):
+    with pytest.raises(InvalidParameterError, match="fillet"):
+        FairnessRule(fillet=value)
+
+
+def test_fillet_sides_are_scale_and_rigid_motion_invariant():
+    V, F = tube(rounded_square(4))
+    w = weights(V, F)
+    rng = np.random.default_rng(1)
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    assert np.array_equal(weights(7.5 * V @ Q.T + [3.0, -2.0, 1.0], F) > 0, w > 0)
