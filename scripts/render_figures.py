@@ -10,7 +10,8 @@ Blender figures (real ``bpy``, Cycles on the CPU; OpenImageDenoise when samples 
                                 mesh edges drawn on the surface; second row: close-ups
   zebra_crease                  reflection lines: GERBS with one edge loop fully creased |
                                 the same mesh without creases
-  zebra_peers_suzanne, zebra_peers_torus, zebra_peers_cylinder, zebra_peers_coin
+  zebra_peers_suzanne, zebra_peers_torus, zebra_peers_cylinder, zebra_peers_coin,
+  zebra_peers_bevel
                                 reflection lines: GERBS | Modified Butterfly (MeshLab, pymeshlab)
                                 | Catmull-Clark (Subdivision Surface), matched output density
 Plots (matplotlib, Agg; the optional ``docs`` extra):
@@ -44,7 +45,7 @@ from figures import gerbs  # noqa: E402
 BLENDER_FIGURES = ("suzanne", "icosphere", "mixed", "zebra_subsurf", "zebra_kinked",
                    "zebra_crease",
                    "zebra_peers_suzanne", "zebra_peers_torus", "zebra_peers_cylinder",
-                   "zebra_peers_coin")
+                   "zebra_peers_coin", "zebra_peers_bevel")
 PLOT_FIGURES = ("kernels", "partition", "convergence")
 ALL_FIGURES = BLENDER_FIGURES + PLOT_FIGURES
 
@@ -129,6 +130,15 @@ def _coin():
     return cylinder(depth=0.2)
 
 
+def _bevel():
+    """Blender's Cube with its Bevel modifier applied (2 segments, width 0.2): a known limit."""
+    import bpy
+    from shape.inputs import bevelled_cube
+
+    v, f = bevelled_cube(bpy, 2, 0.2)
+    return v, [list(x) for x in f]
+
+
 # GERBS | Butterfly | Catmull-Clark, one camera: the peers at `level` steps (full, quick),
 # GERBS at the resolution whose output count is closest to theirs (figures/peers.py)
 PEER_SCENES = {
@@ -136,6 +146,7 @@ PEER_SCENES = {
     "zebra_peers_torus": dict(mesh=_torus, view=(0.5, -1.2, 1.3), stripes=12.0, zoom=0.95),
     "zebra_peers_cylinder": dict(mesh=_cylinder, view=(0.9, -1.5, 1.0), stripes=10.0, zoom=0.9),
     "zebra_peers_coin": dict(mesh=_coin, view=(1.0, -1.6, 0.45), stripes=10.0, zoom=0.9),
+    "zebra_peers_bevel": dict(mesh=_bevel, view=(1.0, -1.5, 0.9), stripes=10.0, zoom=0.9),
 }
 PEER_LEVEL = (3, 1)
 

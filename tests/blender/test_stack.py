@@ -270,3 +270,25 @@ def test_a_final_render_whose_build_fails_shows_the_input_and_says_why(blender, 
     assert api.status(obj)["render_error"] == ""
     assert _render_counts()[obj.name] == 42 + 120 * 3 + 80 * 3  # r = 4
     assert api.status(obj)["render_error"] == "" and np.array_equal(evaluated(obj), P)
+
+
+@pytest.mark.parametrize("segments", [1, 2, 4])
+def test_a_bevelled_cube_stays_a_rounded_box(blender, segments):
+    """Blender's Cube with its own Bevel modifier (width 0.2) below GERBS: the surface stays
+    within 1.1x the cage's box (measured at r = 8: 1.09 / 1.05 / 1.03 for 1 / 2 / 4
+    segments; docs/design.md, "Fillets"). Control: the same input built without the fillet
+    sides' tension balloons (1.47 / 1.24 / 1.16), as Catmull-Clark does not (1.00)."""
+    from blender_addon import api
+    from gerbs_core import FairnessRule
+
+    bpy.ops.mesh.primitive_cube_add()
+    obj = bpy.context.active_object
+    bevel = obj.modifiers.new("Bevel", "BEVEL")
+    bevel.segments, bevel.width = segments, 0.2
+    api.add_surface(obj, resolution=8)
+    P = evaluated(obj)
+    X, (offsets, corners) = _input_mesh(obj)
+    box = np.ptp(P, axis=0) / np.ptp(X, axis=0)
+    assert np.all(box < 1.1), box
+    plain = fresh_surface(X, offsets, corners, 8, fairness=FairnessRule(fillet=0.0))
+    assert np.all(np.ptp(plain, axis=0) / np.ptp(X, axis=0) > 1.15)
