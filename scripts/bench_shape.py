@@ -10,7 +10,7 @@ fan-triangulated: quads split along the diagonal 0-2, n-gons into a fan from
 their first corner; edge threshold 0, so every edge is split at every step),
 Catmull-Clark (Blender's Subdivision Surface modifier, Blender's defaults, the
 evaluated mesh) and the GERBS variants. Inputs (``--only`` takes names or the
-groups sphere, torus, heightfield, blender, real, proportions, bevel): icosphere levels 1-4 on the
+groups sphere, torus, heightfield, blender, real, proportions, bevel, extrusions): icosphere levels 1-4 on the
 unit sphere; the torus R = 1, r = 0.4 as exact quad meshes 12x8, 24x16, 48x32;
 z = f(x, y) on a jittered quad grid and a triangle grid (curvature statistics
 leave out points within one cell of the boundary); Blender's Cube, Cylinder,
@@ -20,8 +20,10 @@ airplane, bone, and bunny10k with ``--only bunny10k`` or ``--only real``: it
 adds about a minute; also Catmull-Clark level 2 there, the acceptance's
 reference); with ``--only proportions``, Blender's Cylinder as a coin (depth 0.2), a
 tower (depth 10) and with three loop cuts, with ``--only bevel`` Blender's Cube with its
-Bevel modifier applied (1, 2 and 4 segments of width 0.2, and 2 of width 0.05) (neither
-group in the default run, nor in the acceptance: GERBS's known limits, docs/design.md). See scripts/shape/measure.py for every figure and the verdict block
+Bevel modifier applied (1, 2 and 4 segments of width 0.2, and 2 of width 0.05), with
+``--only extrusions`` an L-shaped slab extruded 0.5 and the Cube with an inset top extruded
+(none of these groups in the default run, nor in the acceptance: GERBS's known limits,
+docs/design.md). See scripts/shape/measure.py for every figure and the verdict block
 for the acceptance of issue 11. ``--quick``: a subset (no level-4 sphere, no
 48x32 torus, no real mesh but Suzanne).
 

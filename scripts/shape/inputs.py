@@ -8,8 +8,9 @@ of :meth:`HeightField.wave` on [-1, 1]^2: a jittered quad grid and a triangle gr
 both with boundary), ``blender`` (Blender's primitives with default parameters,
 read from bpy.ops.mesh.primitive_*_add; Cylinder and Cone also at 2 r) and
 ``real`` (examples/suzanne.obj and MeshLab's sample meshes); not in the default run:
-``proportions`` (the Cylinder as a coin, a tower, with loop cuts) and ``bevel``
-(Blender's Cube with its Bevel modifier applied).
+``proportions`` (the Cylinder as a coin, a tower, with loop cuts), ``bevel``
+(Blender's Cube with its Bevel modifier applied) and ``extrusions`` (an extruded L-shaped
+slab, an inset-and-extruded Cube).
 """
 from __future__ import annotations
 
@@ -43,6 +44,11 @@ PROPORTIONS = {"coin": ({"depth": 0.2}, 0), "tower": ({"depth": 10.0}, 0),
 # (segments, width). Every edge of such a cage turns 90 / segments degrees, below the
 # tension's sharpness (docs/design.md, "Known limits")
 BEVELS = {"bevel1": (1, 0.2), "bevel2": (2, 0.2), "bevel4": (4, 0.2), "bevel2-thin": (2, 0.05)}
+# extruded shapes as a modeller makes them (not in the default run, nor in the acceptance:
+# ``--only extrusions``): an L-shaped hexagon (2 x 2, a 1 x 1 notch) extruded 0.5 (a slab
+# with n-gon caps, like the coin), and the Cube with its top face inset by 0.3 and the
+# inset extruded 0.6 up
+EXTRUSIONS = ("l-slab", "inset-tower")
 SAMPLES = "pymeshlab/tests/sample_meshes"
 REAL = {"suzanne": ROOT / "examples" / "suzanne.obj", "cow": "cow.obj", "airplane": "airplane.obj",
         "bone": "bone.ply", "bunny10k": "bunny10k_textured.obj"}
@@ -54,11 +60,13 @@ GROUPS = {
     "real": list(REAL),
     "proportions": list(PROPORTIONS),
     "bevel": list(BEVELS),
+    "extrusions": list(EXTRUSIONS),
 }
 ORDER = [n for g in GROUPS.values() for n in g]
 # the default run: everything but bunny10k (about a minute more; --only bunny10k or real)
 # and the proportions
-DEFAULT = [n for n in ORDER if n != "bunny10k" and n not in PROPORTIONS and n not in BEVELS]
+DEFAULT = [n for n in ORDER if n != "bunny10k" and n not in PROPORTIONS and n not in BEVELS
+           and n not in EXTRUSIONS]
 QUICK = ["ico1", "ico2", "ico3", "torus12x8", "torus24x16", "hf-quad", "hf-tri", "cube",
          "cylinder", "cylinder@16", "cone", "cone@16", "suzanne"]
 # refinement sequences whose observed orders are reported: name -> members
@@ -163,6 +171,39 @@ def bevelled_cube(bpy, segments: int, width: float):
     return V.reshape(-1, 3), faces
 
 
+def extruded(bpy, name: str):
+    """(V, faces) of an input of :data:`EXTRUSIONS`, made with bmesh as the Extrude and
+    Inset tools make it (outward normals)."""
+    import bmesh
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bm = bmesh.new()
+    try:
+        if name == "l-slab":
+            pts = [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)]
+            cap = bm.faces.new([bm.verts.new((x, y, 0.0)) for x, y in pts])
+            up = bmesh.ops.extrude_face_region(bm, geom=[cap])
+            bmesh.ops.translate(bm, verts=[e for e in up["geom"] if isinstance(e, bmesh.types.BMVert)],
+                                vec=(0.0, 0.0, 0.5))
+        else:
+            bmesh.ops.create_cube(bm, size=2.0)
+            top = [f for f in bm.faces if f.normal.z > 0.5]
+            bmesh.ops.inset_region(bm, faces=top, thickness=0.3)
+            inner = [f for f in bm.faces if f.normal.z > 0.5
+                     and abs(f.calc_center_median().x) < 1e-6 and abs(f.calc_center_median().y) < 1e-6]
+            up = bmesh.ops.extrude_face_region(bm, geom=inner)
+            bmesh.ops.delete(bm, geom=inner, context="FACES")
+            bmesh.ops.translate(bm, verts=[e for e in up["geom"] if isinstance(e, bmesh.types.BMVert)],
+                                vec=(0.0, 0.0, 0.6))
+        bmesh.ops.recalc_face_normals(bm, faces=bm.faces)
+        V = np.array([v.co[:] for v in bm.verts], dtype=np.float64)
+        bm.verts.index_update()
+        faces = [tuple(v.index for v in f.verts) for f in bm.faces]
+    finally:
+        bm.free()
+    return V, faces
+
+
 def sample_path(name: str) -> Path:
     import pymeshlab
     return Path(pymeshlab.__file__).resolve().parent / "tests" / "sample_meshes" / name
@@ -229,6 +270,9 @@ def build_cases(bpy, names, notes):
         elif base in BEVELS:
             V, F = bevelled_cube(bpy, *BEVELS[base])
             out.append(Case(name, V, F, "bevel", None))
+        elif base in EXTRUSIONS:
+            V, F = extruded(bpy, base)
+            out.append(Case(name, V, F, "extrusions", None))
         elif base in BLENDER:
             op, exact = BLENDER[base]
             if base not in cache:
