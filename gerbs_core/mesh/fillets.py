@@ -10,10 +10,10 @@ local functions of degree 2 to stars that are flat on one side and turn sharply 
 other. A quadratic is even: it curves as much into the wide face as into the strip, and
 every face balloons (bench_shape ``--only bevel``, r = 8: Blender's Cube with a Bevel of
 width 0.2 in 1 / 2 / 4 segments 1.47 / 1.24 / 1.16 times the cage's box, Catmull-Clark
-0.98-1.00; docs/design.md, "Fillets").
+0.98-1.00; docs/design.md, "Fillet sides").
 
-A face f is a fillet side when faces much smaller than f turn against it close to its
-edges: for every face g whose centroid lies within ``REACH`` W_f of an edge of f (W_f the
+A convex face f (in its mean plane) is a fillet side when faces much smaller than f turn
+against it close to its edges: for every face g whose centroid lies within ``REACH`` W_f of an edge of f (W_f the
 largest distance from f's centroid to its corners: the turn is concentrated on the scale
 of f) and whose size (square root of its area) is at most 1 / ``RATIO`` of f's, the angle
 between their normals counts if it is at most ``TOP`` degrees (larger turns are spikes or
@@ -23,6 +23,11 @@ at least ``COVER`` of its edges (a face rounded on every side, as in a bevelled 
 measured, without it Suzanne's brow and ears counted too: her zebra stripes' small pieces
 702 -> 720 and the cow's pairs above 90 degrees at r = 16 13 -> 30), with the weight the
 smoothstep of the largest counted turn from ``TURN_FROM`` to ``TURN_TO`` degrees.
+Non-convex faces are not fillet sides: their layout (the cyclic polygon of their edge
+lengths) is far from them, and under the extra tension the inner L-shaped caps of an
+extruded L with support loops folded (44 output pairs above 90 degrees at r = 8; 11
+without them, in the thin ring quads beside them, where the fairing does not settle:
+bench_shape ``--only extrusions``, docs/design.md).
 
 Everything is read from the rest shape, so the surface stays a fixed linear function of
 the positions. Smooth fine meshes (spheres, tori, height fields) and Blender's primitives
@@ -68,13 +73,29 @@ def _face_geometry(topo, X):
     return cent, normal, area, W
 
 
-def _near_pairs(topo, X, cent, W, size):
-    """(f, g, k) (P,) each: for the faces f of ``size`` (F,) (sqrt of the area) at least RATIO
-    times the smallest face's, the faces g at most 1 / RATIO of f's size whose centroid lies
-    within REACH W_f of f's edges, k the corner of f starting the nearest edge (edge k:
-    corner k -> next)."""
+def _convex(topo, X, normal) -> np.ndarray:
+    """(F,) bool: the face turns the same way at every corner about its normal (a convex
+    polygon in its mean plane; a straight corner counts as convex)."""
+    fv, cf, nx = topo.face_vertices, topo.corner_face, topo.corner_next
+    prev = np.empty_like(nx)
+    prev[nx] = np.arange(len(nx))
+    turn = (np.cross(X[fv] - X[fv[prev]], X[fv[nx]] - X[fv]) * normal[cf]).sum(1)
+    scale = np.linalg.norm(X[fv] - X[fv[prev]], axis=1) * np.linalg.norm(X[fv[nx]] - X[fv], axis=1)
+    bad = np.zeros(topo.n_faces, bool)
+    bad[cf[turn < -1e-9 * scale]] = True
+    return ~bad
+
+
+def _near_pairs(topo, X, cent, W, size, eligible):
+    """(f, g, k) (P,) each: for the ``eligible`` faces f (F,) bool of ``size`` (F,) (sqrt of
+    the area) at least RATIO times the smallest face's, the faces g of positive size at most
+    1 / RATIO of f's whose centroid lies within REACH W_f of f's edges, k the corner of f
+    starting the nearest edge (edge k: corner k -> next)."""
     reach = REACH * W
-    wide = np.flatnonzero(size >= RATIO * size.min())
+    positive = size[size > 0.0]
+    if not len(positive):
+        return (np.empty(0, np.int64),) * 3
+    wide = np.flatnonzero(eligible & (size >= RATIO * positive.min()))
     # candidates: centroids within W_f + reach of f's centroid (every point of f is
     # within W_f of it)
     lists = cKDTree(cent).query_ball_point(cent[wide], (W + reach)[wide], return_sorted=False)
@@ -106,7 +127,10 @@ def fillet_sides(topo, X) -> np.ndarray:
     X (V, 3) (module docstring): 0 for most faces of most meshes."""
     X = np.asarray(X, dtype=np.float64)
     cent, normal, area, W = _face_geometry(topo, X)
-    f, g, k = _near_pairs(topo, X, cent, W, np.sqrt(area))
+    # a non-convex face's layout (the cyclic polygon of its edge lengths) is far from it:
+    # measured, the inner L-shaped caps of an extruded L with support loops folded (44
+    # output pairs above 90 degrees) under the fillet sides' tension
+    f, g, k = _near_pairs(topo, X, cent, W, np.sqrt(area), _convex(topo, X, normal))
     ang = np.degrees(np.arccos(np.clip((normal[f] * normal[g]).sum(1), -1.0, 1.0)))
     ok = (ang >= TURN_FROM) & (ang <= TOP)
     f, k, ang = f[ok], k[ok], ang[ok]

@@ -46,9 +46,10 @@ PROPORTIONS = {"coin": ({"depth": 0.2}, 0), "tower": ({"depth": 10.0}, 0),
 BEVELS = {"bevel1": (1, 0.2), "bevel2": (2, 0.2), "bevel4": (4, 0.2), "bevel2-thin": (2, 0.05)}
 # extruded shapes as a modeller makes them (not in the default run, nor in the acceptance:
 # ``--only extrusions``): an L-shaped hexagon (2 x 2, a 1 x 1 notch) extruded 0.5 (a slab
-# with n-gon caps, like the coin), and the Cube with its top face inset by 0.3 and the
+# with n-gon caps, like the coin), the same with support loops (caps inset by 0.05, the
+# sides cut 0.06 from either cap), and the Cube with its top face inset by 0.3 and the
 # inset extruded 0.6 up
-EXTRUSIONS = ("l-slab", "inset-tower")
+EXTRUSIONS = ("l-slab", "l-slab-loops", "inset-tower")
 SAMPLES = "pymeshlab/tests/sample_meshes"
 REAL = {"suzanne": ROOT / "examples" / "suzanne.obj", "cow": "cow.obj", "airplane": "airplane.obj",
         "bone": "bone.ply", "bunny10k": "bunny10k_textured.obj"}
@@ -179,12 +180,19 @@ def extruded(bpy, name: str):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bm = bmesh.new()
     try:
-        if name == "l-slab":
+        if name.startswith("l-slab"):
             pts = [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)]
             cap = bm.faces.new([bm.verts.new((x, y, 0.0)) for x, y in pts])
             up = bmesh.ops.extrude_face_region(bm, geom=[cap])
             bmesh.ops.translate(bm, verts=[e for e in up["geom"] if isinstance(e, bmesh.types.BMVert)],
                                 vec=(0.0, 0.0, 0.5))
+            if name == "l-slab-loops":
+                bmesh.ops.recalc_face_normals(bm, faces=bm.faces)
+                caps = [f for f in bm.faces if abs(f.normal.z) > 0.9]
+                bmesh.ops.inset_individual(bm, faces=caps, thickness=0.05)
+                for z in (0.06, 0.44):
+                    bmesh.ops.bisect_plane(bm, geom=list(bm.verts) + list(bm.edges) + list(bm.faces),
+                                           plane_co=(0.0, 0.0, z), plane_no=(0.0, 0.0, 1.0))
         else:
             bmesh.ops.create_cube(bm, size=2.0)
             top = [f for f in bm.faces if f.normal.z > 0.5]

@@ -120,3 +120,15 @@ def test_fillet_sides_are_scale_and_rigid_motion_invariant():
     rng = np.random.default_rng(1)
     Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     assert np.array_equal(weights(7.5 * V @ Q.T + [3.0, -2.0, 1.0], F) > 0, w > 0)
+
+
+def test_only_convex_faces_can_be_fillet_sides():
+    # an L-shaped hexagon (a 270-degree corner), a square and a pentagon with one straight
+    # corner, each in its plane
+    V = np.array([(0, 0, 0), (2, 0, 0), (2, 1, 0), (1, 1, 0), (1, 2, 0), (0, 2, 0),
+                  (3, 0, 0), (4, 0, 0), (4, 1, 0), (3, 1, 0),
+                  (5, 0, 0), (6, 0, 0), (7, 0, 0), (7, 1, 0), (5, 1, 0)], dtype=float)
+    F = [(0, 1, 2, 3, 4, 5), (6, 7, 8, 9), (10, 11, 12, 13, 14)]
+    topo = MeshTopology(F, len(V))
+    normal = np.tile([0.0, 0.0, 1.0], (3, 1))
+    assert fillets._convex(topo, V, normal).tolist() == [False, True, True]
