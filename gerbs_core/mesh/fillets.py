@@ -25,9 +25,9 @@ measured, without it Suzanne's brow and ears counted too: her zebra stripes' sma
 smoothstep of the largest counted turn from ``TURN_FROM`` to ``TURN_TO`` degrees.
 Non-convex faces are not fillet sides: their layout (the cyclic polygon of their edge
 lengths) is far from them, and under the extra tension the inner L-shaped caps of an
-extruded L with support loops folded (44 output pairs above 90 degrees at r = 8; 11
-without them, in the thin ring quads beside them, where the fairing does not settle:
-bench_shape ``--only extrusions``, docs/design.md).
+extruded L with support loops folded (44 output pairs above 90 degrees at r = 8; 2
+without them, where the fairing does not settle on that exact, symmetric input;
+docs/design.md "Fillet sides").
 
 Everything is read from the rest shape, so the surface stays a fixed linear function of
 the positions. Smooth fine meshes (spheres, tori, height fields) and Blender's primitives
