@@ -72,9 +72,14 @@ from .triangle_edges import triangle_pairs
 
 __all__ = ["TurnCorrection", "FairedFits", "FairingSkipped", "turn_correction"]
 
-# a star's offsets are flat where their second moment's smallest eigenvalue is at most
-# FLAT times the largest (the pseudo-inverse's cut-off as well)
-FLAT = 1e-8
+# a star's ring-1 offsets are (nearly) flat where their second moment's smallest
+# eigenvalue is at most FLAT times the largest: rings 1-2 carry its corrections. Not the
+# pseudo-inverse's cut-off (RCOND): the least-norm weights grow as 1 / sqrt(eigenvalue),
+# and measured on a box with support loops whose inset corners were lifted by eps, with
+# FLAT = RCOND the weights reached 56 at eps = 3e-4 and a drag of one corner by 0.05 threw
+# the surface over 4.2 (the box 0.5 thick); at 1e-2 they stay within 0.4-0.7 and 0.61
+FLAT = 1e-2
+RCOND = 1e-8
 
 
 class FairingSkipped(Exception):
@@ -578,11 +583,11 @@ def _second_moments(pv, offsets, V) -> np.ndarray:
 def _offset_pairs(v1, u1, act, X) -> tuple[np.ndarray, np.ndarray]:
     """(pv, pu) (K,) each, sorted by pv then pu: the offsets X_u - X_v a correction of the
     active vertices (``act`` (V,) bool) is written in. Ring 1 (the directed pairs (v1, u1)),
-    and rings 1-2 at a vertex whose ring-1 offsets are flat (the smallest eigenvalue of
-    their second moment below FLAT times the largest): a flat star's offsets cannot carry a
-    correction across its plane (measured: an extruded L slab with support loops kept 11
+    and rings 1-2 at a vertex whose ring-1 offsets are (nearly) flat (the smallest eigenvalue
+    of their second moment below FLAT times the largest): a flat star's offsets cannot carry
+    a correction across its plane (measured: an extruded L slab with support loops kept 11
     output pairs above 90 degrees, the fairing's own count 2, with 53 of 268 corrections
-    losing more than a tenth of their length)."""
+    losing more than a tenth of their length), a nearly flat one only with large weights."""
     V = len(act)
     pv, pu = v1[act[v1]], u1[act[v1]]
     lam = np.linalg.eigvalsh(_second_moments(pv, X[pu] - X[pv], V))
@@ -601,7 +606,7 @@ def _offset_weights(target, D, owner, pair_vertex, pair_offset, V):
     (``target`` (K, 3) the target of each term's row), of least norm: a_k = D_k . M_v^+
     target_k with M_v = sum of d d^T over v's offsets d (``pair_vertex``, ``pair_offset``:
     each (v, u) once, :func:`_offset_pairs`); ``owner`` (K,) the terms' vertices."""
-    Mp = np.linalg.pinv(_second_moments(pair_vertex, pair_offset, V), rcond=FLAT, hermitian=True)
+    Mp = np.linalg.pinv(_second_moments(pair_vertex, pair_offset, V), rcond=RCOND, hermitian=True)
     return np.einsum("ki,kij,kj->k", D, Mp[owner], target)
 
 

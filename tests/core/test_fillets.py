@@ -132,3 +132,53 @@ def test_only_convex_faces_can_be_fillet_sides():
     topo = MeshTopology(F, len(V))
     normal = np.tile([0.0, 0.0, 1.0], (3, 1))
     assert fillets._convex(topo, V, normal).tolist() == [False, True, True]
+
+
+def test_turns_near_one_edge_do_not_cover_a_face():
+    """A square tube with two opposite corners rounded (4 segments) and two sharp: each
+    flat side has the rounding near one of its four edges only (several strips there, but
+    one edge): no fillet side. The fully rounded tube's sides are (the control above)."""
+    prof = rounded_square(4)
+    sharp = {1: (-1.0, 1.0), 3: (1.0, -1.0)}
+    pts = []
+    for corner in range(4):
+        if corner in sharp:
+            pts.append(sharp[corner])
+        else:
+            pts.extend(prof[corner * 5:(corner + 1) * 5].tolist())
+    V, F = tube(np.array(pts))
+    assert len(pts) == 12
+    assert not weights(V, F).any()
+
+
+def test_non_convex_faces_are_never_fillet_sides(monkeypatch):
+    V, F = tube(rounded_square(2))
+    assert weights(V, F).any()
+    monkeypatch.setattr(fillets, "_convex", lambda topo, X, normal: np.zeros(topo.n_faces, bool))
+    assert not weights(V, F).any()
+
+
+def test_candidates_are_bounded_beside_many_tiny_faces():
+    """A 2,000-segment disc 0.01 thick with fanned caps: each long fan triangle has about a
+    hundred tiny side quads within reach of its rim edge. At most NEAREST of them per edge
+    are examined, so the work stays O(edges): a ball query per face gathered O(faces^2)
+    candidates (a 4,000-segment disc: 23 s and 4 GB)."""
+    n, h = 2000, 0.01
+    a = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    V = [(np.cos(t), np.sin(t), z) for z in (0.0, h) for t in a] + [(0, 0, 0), (0, 0, h)]
+    F = [(i, (i + 1) % n, n + (i + 1) % n, n + i) for i in range(n)]
+    F += [(2 * n, (i + 1) % n, i) for i in range(n)] + [(2 * n + 1, n + i, n + (i + 1) % n)
+                                                        for i in range(n)]
+    V = np.array(V, dtype=float)
+    topo = MeshTopology(F, len(V))
+    cent, normal, area, W = fillets._face_geometry(topo, V)
+    f, g, k = fillets._near_pairs(topo, V, cent, W, np.sqrt(area), np.ones(len(F), bool))
+    per_edge = np.bincount(f * 3 + k)
+    assert 0 < per_edge.max() <= fillets.NEAREST
+    # the control: far more side quads than that lie within reach of a fan triangle's rim
+    t = n    # the first bottom fan triangle (2n, 1, 0): its rim edge runs from 1 to 0
+    p0, p1 = V[1], V[0]
+    d = p1 - p0
+    u = np.clip(((cent[:n] - p0) @ d) / (d @ d), 0.0, 1.0)
+    dist = np.linalg.norm(cent[:n] - (p0 + u[:, None] * d), axis=1)
+    assert (dist <= fillets.REACH * W[t]).sum() > 2 * fillets.NEAREST
