@@ -276,7 +276,7 @@ def test_a_final_render_whose_build_fails_shows_the_input_and_says_why(blender, 
 def test_a_bevelled_cube_stays_a_rounded_box(blender, segments):
     """Blender's Cube with its own Bevel modifier (width 0.2) below GERBS: the surface stays
     within 1.1x the cage's box (measured at r = 8: 1.09 / 1.05 / 1.03 for 1 / 2 / 4
-    segments; docs/design.md, "Fillets"). Control: the same input built without the fillet
+    segments; docs/design.md, "Fillet sides"). Control: the same input built without the fillet
     sides' tension balloons (1.47 / 1.24 / 1.16), as Catmull-Clark does not (1.00)."""
     from blender_addon import api
     from gerbs_core import FairnessRule
