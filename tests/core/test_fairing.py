@@ -251,3 +251,32 @@ def test_nearly_flat_stars_get_small_weights(eps):
     moved[16, 2] += 0.05
     P = s.with_positions(moved).tessellate(8)[0]
     assert np.ptp(P[:, 2]) < 1.0
+
+
+def test_a_region_that_still_folds_runs_again(monkeypatch):
+    """L-BFGS runs again from where it stopped while its region has a pair beyond 90
+    degrees: on the slab with its inset corners lifted by +-0.02 and one iteration per
+    run, a single run leaves output pairs beyond 90 degrees (measured 24 / 4 / 92 at
+    r = 8) and one restart removes them (24 / 0 / 78); the control is RESTARTS = 0."""
+    import gerbs_core.mesh.fairing as fairing
+
+    V, F = _slab()
+    V[16:24, 2] += 0.02 * np.array([1, -1, 1, -1, 1, -1, 1, -1])
+    rule = FairnessRule(turn_iterations=1)
+    runs = []
+    inner = fairing.minimize
+
+    def counted(*args, **kwargs):
+        runs.append(1)
+        return inner(*args, **kwargs)
+
+    monkeypatch.setattr(fairing, "minimize", counted)
+
+    def beyond_90(restarts):
+        monkeypatch.setattr(fairing, "RESTARTS", restarts)
+        runs.clear()
+        return _folds(BlendingSurface(V, F, fairness=rule), 8)["above_90"], len(runs)
+
+    (once, n_once), (again, n_again) = beyond_90(0), beyond_90(2)
+    assert once > 0 and n_once == 1
+    assert again < once and n_again > 1
