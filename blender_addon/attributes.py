@@ -67,18 +67,34 @@ class Carried:
         return tuple(layer.key for layer in self.layers)
 
     def same(self, other) -> bool:
-        """Same layers with equal values (as floats: -0.0 == +0.0) and the same active maps (the
-        same object: the node group found its values equal, stack.read_input)."""
+        """Same layers with equal values and the same active maps (the same object: the
+        node group found its values equal, stack.read_input). Values compare as the node
+        group does (:func:`values_equal`)."""
         if other is self:
             return True
         return (other is not None and self.keys() == other.keys()
                 and self.flags() == other.flags()
                 and np.array_equal(self.edge_verts, other.edge_verts)
-                and all(np.array_equal(a.values, b.values)
+                and all(values_equal(a.values, b.values)
                         for a, b in zip(self.layers, other.layers)))
 
     def flags(self) -> tuple:
         return (self.active_uv, self.render_uv, self.active_color, self.default_color)
+
+
+def values_equal(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether the values a, b (n, width) of a layer are equal as the node group compares
+    them (node_fresh): integers and booleans exactly, floats within ids.LAYER_TOLERANCE
+    (1 + |b_i|) in every component (|b_i| the row's length; -0.0 == +0.0; a NaN or an
+    infinity never equal)."""
+    if a.shape != b.shape:
+        return False
+    if a.dtype.kind != "f":
+        return bool(np.array_equal(a, b))
+    with np.errstate(invalid="ignore", over="ignore"):
+        tol = ids.LAYER_TOLERANCE * (1.0 + np.linalg.norm(b.astype(np.float64), axis=-1,
+                                                        keepdims=True))
+        return bool(np.all(np.abs(a.astype(np.float64) - b) <= tol))
 
 
 def carried_name(name: str) -> bool:

@@ -8,7 +8,8 @@ A result (the geometry of the hidden result object) is *fresh* when its record
         == the record's at the same index
     and every carried layer i: the input's attribute (name from "Attribute Names",
         domain and type from the result's layer table) exists and equals the record's
-        values, element by element (a repeat zone over the layers)
+        values, element by element (a repeat zone over the layers; floats within
+        ids.LAYER_TOLERANCE (1 + |value|), integers exactly)
     and every recorded setting == the current one ("resolution" the one asked for)
     and, with Use Custom Normals, every vertex normal == the record's (the Normal node
         on points is bit for bit the mesh's ``vertex_normals`` the add-on stored)
@@ -104,11 +105,20 @@ def settings_fresh(t, result, current: dict):
     return t.boolean("AND", *checks)
 
 
-def _differs(t, compare, value, stored):
-    """`value` differs from `stored` or either is not a number: NOT(|a - b| <= 0) (the
-    Compare node's EQUAL, element by element), which a NaN or an infinity on either side
-    makes True; its NOT_EQUAL, |a - b| > 0, is False for a NaN and for equal infinities."""
-    return t.boolean("NOT", t.compare(compare, "EQUAL", value, stored))
+def _differs(t, compare, value, stored, epsilon=0.0):
+    """`value` differs from `stored` or either is not a number: NOT(|a - b| <= epsilon)
+    (the Compare node's EQUAL, element by element), which a NaN or an infinity on either
+    side makes True; its NOT_EQUAL, |a - b| > 0, is False for a NaN and for equal
+    infinities."""
+    return t.boolean("NOT", t.compare(compare, "EQUAL", value, stored, epsilon))
+
+
+def _layer_epsilon(t, stored):
+    """ids.LAYER_TOLERANCE (1 + |stored|): the carried float layers' tolerance (a vector's or
+    color's length; infinite or NaN for a non-finite record, which then never equals)."""
+    length = t.node("ShaderNodeVectorMath", operation="LENGTH")
+    t.link(stored, length.inputs[0])
+    return t.math("MULTIPLY_ADD", length.outputs["Value"], ids.LAYER_TOLERANCE, ids.LAYER_TOLERANCE)
 
 
 def positions_fresh(t, base, result):
@@ -183,8 +193,8 @@ def _layer_equal(t, base, result, name, record, kind, domain):
     data_type, compare = _CHECK_TYPES[kind]
     value, exists = t.named(name, data_type)
     stored = t.sample(result, record, data_type, domain, t.index())
-    unequal = _differs(t, compare, value, stored) if compare != "INT" else \
-        t.compare(compare, "NOT_EQUAL", value, stored)
+    unequal = _differs(t, compare, value, stored, _layer_epsilon(t, stored)) \
+        if compare != "INT" else t.compare(compare, "NOT_EQUAL", value, stored)
     differs = t.boolean("OR", t.boolean("NOT", exists), unequal)
     return t.none_differ(base, domain, differs)
 

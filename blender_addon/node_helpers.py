@@ -47,15 +47,16 @@ class Tree:
             self.feed(node.inputs[name], value)
         return node.outputs
 
-    def compare(self, data_type, operation, a, b):
-        """Exact comparison of two values -> BOOLEAN output."""
+    def compare(self, data_type, operation, a, b, epsilon=0.0):
+        """Comparison of two values -> BOOLEAN output: exact, or for EQUAL / NOT_EQUAL of
+        floats, vectors (per element) and colors within ``epsilon`` (a value or socket)."""
         node = self.node("FunctionNodeCompare", data_type=data_type, operation=operation)
         suffix = {"FLOAT": "", "INT": "_INT", "VECTOR": "_VEC3", "RGBA": "_COL",
                   "STRING": "_STR"}[data_type]
         if data_type == "VECTOR":
             node.mode = "ELEMENT"
         if data_type in ("FLOAT", "VECTOR", "RGBA"):
-            node.inputs["Epsilon"].default_value = 0.0
+            self.feed(node.inputs["Epsilon"], epsilon)
         for name, value in (("A", a), ("B", b)):
             self.feed(self.socket(node.inputs, name + suffix), value)
         return node.outputs[0]
