@@ -54,7 +54,7 @@ from .fits import CANDIDATES, candidate_fits_all, chosen_rows
 from .monomials import monomial_exponents, monomial_gradients, monomials, n_monomials
 from .row_values import (candidate_coefs, candidate_values, chunks, copy_aliases, own_rows,
                          per_degree, row_sums, square_norms)
-from .fillets import fillet_sides
+from .fillets import fillet_sides, smoothstep
 from .spread_fits import SPREAD, gate, spread_candidates, spread_faces, star_spread
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness",
@@ -170,8 +170,7 @@ def face_sharpness(topo, X, sharp_from: float, sharp_to: float) -> np.ndarray:
     worst = np.zeros(topo.n_faces)
     np.maximum.at(worst, ef[two, 0], ang)
     np.maximum.at(worst, ef[two, 1], ang)
-    t = np.clip((worst - sharp_from) / (sharp_to - sharp_from), 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
+    return smoothstep(worst, sharp_from, sharp_to)
 
 
 def tension_weights(topo, X, rule: FairnessRule) -> np.ndarray:

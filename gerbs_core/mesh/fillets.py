@@ -42,7 +42,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["REACH", "RATIO", "TURN_FROM", "TURN_TO", "TOP", "COVER", "NEAREST", "fillet_sides"]
+__all__ = ["REACH", "RATIO", "TURN_FROM", "TURN_TO", "TOP", "COVER", "NEAREST", "fillet_sides",
+           "smoothstep"]
 
 REACH = 0.25        # near: a smaller face's centroid within REACH W_f of an edge of f
 RATIO = 3.0         # smaller: sqrt(area) at most 1 / RATIO of f's
@@ -53,8 +54,10 @@ COVER = 0.5         # the least share of f's edges that such turns lie near
 NEAREST = 32        # the candidate smaller faces per edge of f (the nearest to its midpoint)
 
 
-def _smoothstep(t):
-    t = np.clip(t, 0.0, 1.0)
+def smoothstep(x, lo: float, hi: float) -> np.ndarray:
+    """0 below ``lo``, 1 above ``hi``, 3 t^2 - 2 t^3 between (t = (x - lo) / (hi - lo)): the
+    ramp of the tension's weights (these and :func:`gerbs_core.mesh.agreement.face_sharpness`)."""
+    t = np.clip((x - lo) / (hi - lo), 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
 
 
@@ -79,9 +82,7 @@ def _face_geometry(topo, X):
 def _convex(topo, X, normal) -> np.ndarray:
     """(F,) bool: the face turns the same way at every corner about its normal (a convex
     polygon in its mean plane; a straight corner counts as convex)."""
-    fv, cf, nx = topo.face_vertices, topo.corner_face, topo.corner_next
-    prev = np.empty_like(nx)
-    prev[nx] = np.arange(len(nx))
+    fv, cf, nx, prev = topo.face_vertices, topo.corner_face, topo.corner_next, topo.corner_prev
     turn = (np.cross(X[fv] - X[fv[prev]], X[fv[nx]] - X[fv]) * normal[cf]).sum(1)
     scale = np.linalg.norm(X[fv] - X[fv[prev]], axis=1) * np.linalg.norm(X[fv[nx]] - X[fv], axis=1)
     bad = np.zeros(topo.n_faces, bool)
@@ -164,5 +165,5 @@ def fillet_sides(topo, X) -> np.ndarray:
     covered = np.bincount(edges, minlength=topo.n_faces) >= COVER * sizes
     turn = np.zeros(topo.n_faces)
     np.maximum.at(turn, f, ang)
-    out[covered] = _smoothstep((turn[covered] - TURN_FROM) / (TURN_TO - TURN_FROM))
+    out[covered] = smoothstep(turn[covered], TURN_FROM, TURN_TO)
     return out
