@@ -65,9 +65,10 @@ GROUPS = {
 }
 ORDER = [n for g in GROUPS.values() for n in g]
 # the default run: everything but bunny10k (about a minute more; --only bunny10k or real)
-# and the proportions
-DEFAULT = [n for n in ORDER if n != "bunny10k" and n not in PROPORTIONS and n not in BEVELS
-           and n not in EXTRUSIONS]
+# and the groups of known limits
+EXTRA_GROUPS = ("proportions", "bevel", "extrusions")
+DEFAULT = [n for n in ORDER if n != "bunny10k"
+           and not any(n in GROUPS[g] for g in EXTRA_GROUPS)]
 QUICK = ["ico1", "ico2", "ico3", "torus12x8", "torus24x16", "hf-quad", "hf-tri", "cube",
          "cylinder", "cylinder@16", "cone", "cone@16", "suzanne"]
 # refinement sequences whose observed orders are reported: name -> members
@@ -145,12 +146,17 @@ def blender_primitive(bpy, op: str, cuts: int = 0, **params):
         bmesh.ops.subdivide_edges(bm, edges=vertical, cuts=cuts, use_grid_fill=False)
         bm.to_mesh(me)
         bm.free()
-    V = np.empty(3 * len(me.vertices))
-    me.vertices.foreach_get("co", V)
-    faces = [tuple(p.vertices) for p in me.polygons]
+    V, faces = _mesh_arrays(me)
     if op == "primitive_uv_sphere_add":
         faces.sort(key=sorted)
-    return V.reshape(-1, 3), faces
+    return V, faces
+
+
+def _mesh_arrays(me):
+    """(V (V, 3) float64, faces [tuple of vertex indices]) of a bpy mesh."""
+    V = np.empty(3 * len(me.vertices))
+    me.vertices.foreach_get("co", V)
+    return V.reshape(-1, 3), [tuple(p.vertices) for p in me.polygons]
 
 
 def bevelled_cube(bpy, segments: int, width: float):
@@ -162,14 +168,10 @@ def bevelled_cube(bpy, segments: int, width: float):
     mod = ob.modifiers.new("bevel", "BEVEL")
     mod.segments, mod.width = segments, width
     ev = ob.evaluated_get(bpy.context.evaluated_depsgraph_get())
-    me = ev.to_mesh()
     try:
-        V = np.empty(3 * len(me.vertices))
-        me.vertices.foreach_get("co", V)
-        faces = [tuple(p.vertices) for p in me.polygons]
+        return _mesh_arrays(ev.to_mesh())
     finally:
         ev.to_mesh_clear()
-    return V.reshape(-1, 3), faces
 
 
 def extruded(bpy, name: str):
