@@ -8,7 +8,8 @@ of :meth:`HeightField.wave` on [-1, 1]^2: a jittered quad grid and a triangle gr
 both with boundary), ``blender`` (Blender's primitives with default parameters,
 read from bpy.ops.mesh.primitive_*_add; Cylinder and Cone also at 2 r) and
 ``real`` (examples/suzanne.obj and MeshLab's sample meshes); not in the default run:
-``proportions`` (the Cylinder as a coin, a tower, with loop cuts), ``bevel``
+``proportions`` (the Cylinder as a coin, a tower, with loop cuts; the Cube scaled to a
+board and a plank), ``bevel``
 (Blender's Cube with its Bevel modifier applied) and ``extrusions`` (an extruded L-shaped
 slab, an inset-and-extruded Cube).
 """
@@ -39,6 +40,9 @@ BLENDER = {"cube": ("primitive_cube_add", None), "cylinder": ("primitive_cylinde
 # GERBS's local functions are not (docs/design.md, "Known limits")
 PROPORTIONS = {"coin": ({"depth": 0.2}, 0), "tower": ({"depth": 10.0}, 0),
                "cylinder-cuts": ({}, 3)}
+# Blender's Cube scaled as a modeller makes a board or a plank (Object > Apply > Scale):
+# name -> the scale of its x, y, z (not in the default run: ``--only proportions``)
+SCALED_CUBES = {"slab": (1.0, 1.0, 0.1), "plank": (2.0, 0.25, 0.1)}
 # Blender's Cube with its Bevel modifier applied, as a modeller rounds a box's edges before
 # subdividing (not in the default run, nor in the acceptance: ``--only bevel``): name ->
 # (segments, width). Every edge of such a cage turns 90 / segments degrees, below the
@@ -59,7 +63,7 @@ GROUPS = {
     "heightfield": ["hf-quad", "hf-tri"],
     "blender": ["cube", "cylinder", "cylinder@16", "cone", "cone@16", "uvsphere", "btorus", "monkey"],
     "real": list(REAL),
-    "proportions": list(PROPORTIONS),
+    "proportions": list(PROPORTIONS) + list(SCALED_CUBES),
     "bevel": list(BEVELS),
     "extrusions": list(EXTRUSIONS),
 }
@@ -277,6 +281,9 @@ def build_cases(bpy, names, notes):
             params, cuts = PROPORTIONS[base]
             V, F = blender_primitive(bpy, "primitive_cylinder_add", cuts, **params)
             out.append(Case(name, V, F, "proportions", None))
+        elif base in SCALED_CUBES:
+            V, F = blender_primitive(bpy, "primitive_cube_add")
+            out.append(Case(name, V * np.array(SCALED_CUBES[base]), F, "proportions", None))
         elif base in BEVELS:
             V, F = bevelled_cube(bpy, *BEVELS[base])
             out.append(Case(name, V, F, "bevel", None))
