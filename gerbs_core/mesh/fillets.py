@@ -61,7 +61,7 @@ def smoothstep(x, lo: float, hi: float) -> np.ndarray:
     return t * t * (3.0 - 2.0 * t)
 
 
-def _face_geometry(topo, X):
+def face_geometry(topo, X):
     """(centroids (F, 3), unit normals (F, 3), areas (F,), W (F,) the largest
     centroid-to-corner distances) of the faces at positions X (V, 3); normal and area from
     the vector area sum_k x_k x x_{k+1} / 2 (a non-planar face's mean plane)."""
@@ -147,7 +147,7 @@ def fillet_sides(topo, X) -> np.ndarray:
     """(F,) in [0, 1]: how much each face is the wide side of a fillet at the rest positions
     X (V, 3) (module docstring): 0 for most faces of most meshes."""
     X = np.asarray(X, dtype=np.float64)
-    cent, normal, area, W = _face_geometry(topo, X)
+    cent, normal, area, W = face_geometry(topo, X)
     # a non-convex face's layout (the cyclic polygon of its edge lengths) is far from it:
     # measured, the inner L-shaped caps of an extruded L with support loops folded (44
     # output pairs above 90 degrees) under the fillet sides' tension

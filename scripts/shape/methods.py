@@ -52,6 +52,8 @@ VARIANTS = {
     # without the fairing of the surface's turns (gerbs_core.mesh.fairing; the default
     # until 2026-12-06)
     "no-fairing": {"fairness": gerbs_core.FairnessRule(turn=180.0)},
+    # the fairing without its stay (the default until 2026-12-07)
+    "no-stay": {"fairness": gerbs_core.FairnessRule(turn_stay=0.0)},
 }
 
 

@@ -77,6 +77,52 @@ def test_penalty_of_a_few_moving_points_matches_finite_differences():
     assert np.abs(num - bad).max() > 1e-3 * np.abs(G).max()
 
 
+def test_stay_term_value_and_gradient():
+    # the stay: sum_p stay_p |(E z)_p|^2 on top of the turn penalty, and its gradient
+    # 2 E^T (stay E z); at z = 0 it adds nothing
+    rng = np.random.default_rng(7)
+    pts = rng.normal(size=(9, 3))
+    tris = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4], [3, 5, 4], [1, 6, 3], [6, 7, 3], [7, 8, 3]])
+    a, b = triangle_pairs(tris)
+    E = sp.csr_matrix(([1.0, 0.5, -0.7, 2.0], ([2, 2, 6, 8], [0, 1, 1, 0])), shape=(9, 2))
+    stay = rng.uniform(0.5, 3.0, size=9)
+    pen, bare = _Penalty(pts, E, tris, a, b, 0.95, stay), _Penalty(pts, E, tris, a, b, 0.95)
+    assert pen(np.zeros((2, 3)))[0] == bare(np.zeros((2, 3)))[0]
+    z0 = rng.normal(scale=0.1, size=(2, 3))
+    F, G = pen(z0)
+    d = E @ z0
+    assert F == pytest.approx(bare(z0)[0] + float(np.sum(stay[:, None] * d * d)), rel=1e-12)
+    num = np.zeros_like(z0)
+    for i in range(2):
+        for j in range(3):
+            e = np.zeros_like(z0)
+            e[i, j] = 1e-6
+            num[i, j] = (pen(z0 + e)[0] - pen(z0 - e)[0]) / 2e-6
+    assert np.abs(num - G).max() <= 1e-7 * np.abs(G).max()
+    # the control: the turn's gradient alone misses the stay's part
+    assert np.abs(num - bare(z0)[1]).max() > 1e-3 * np.abs(G).max()
+
+
+def test_stay_keeps_a_plank_from_inflating():
+    # Blender's Cube scaled to a 4 x 0.5 x 0.2 plank: the surface folds (pairs beyond 90
+    # degrees) without the fairing; the fairing without its stay unfolds it by inflating the
+    # plank to about 10x its thickness, with the stay to about 3x, still without folds
+    V, F = P.cube()
+    V = V * [2.0, 0.25, 0.1]
+
+    def measure(rule):
+        pts, tris, _ = BlendingSurface(V, F, fairness=rule).tessellate(8)
+        return np.ptp(pts, axis=0) / np.ptp(V, axis=0), fold_counts(pts, np.asarray(tris))
+
+    box, folds = measure(None)
+    box0, folds0 = measure(FairnessRule(turn_stay=0.0))
+    _, unfaired = measure(OFF)
+    assert unfaired["above_90"] > 0
+    assert folds["above_60"] == 0 and folds0["above_60"] == 0
+    assert box0[2] > 8.0 and box0[1] > 3.0
+    assert box[2] < 3.5 and box[1] < 2.0
+
+
 def test_components_are_faired_alone():
     # each ring-1 component is its own region: Suzanne's correction in a mesh of two
     # Suzannes (the second moved by 5) is hers alone, up to the optimiser's round-off
@@ -154,6 +200,7 @@ def test_no_correction_where_nothing_turns_sharply(mesh):
 @pytest.mark.parametrize("field, value", [("turn", 190.0), ("turn", -1.0), ("turn_degree", 0),
                                           ("turn_degree", 5), ("turn_resolution", 1),
                                           ("turn_weight", -0.1), ("turn_iterations", -1),
+                                          ("turn_stay", -1e-3), ("turn_stay", float("inf")),
                                           ("turn_spread", float("nan"))])
 def test_rule_refuses_bad_settings(field, value):
     with pytest.raises(InvalidParameterError, match=field):

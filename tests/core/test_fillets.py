@@ -171,7 +171,7 @@ def test_candidates_are_bounded_beside_many_tiny_faces():
                                                         for i in range(n)]
     V = np.array(V, dtype=float)
     topo = MeshTopology(F, len(V))
-    cent, normal, area, W = fillets._face_geometry(topo, V)
+    cent, normal, area, W = fillets.face_geometry(topo, V)
     f, g, k = fillets._near_pairs(topo, V, cent, W, np.sqrt(area), np.ones(len(F), bool))
     per_edge = np.bincount(f * 3 + k)
     assert 0 < per_edge.max() <= fillets.NEAREST
