@@ -65,7 +65,9 @@ def panel_rows(obj, mod, width_px: float = 300.0, scale: float = 1.0) -> dict:
                                      f"builds.", width_px, scale)
     elif info["warning"]:  # what the mesh repair changed
         out["warning"] = problems.wrap(problems.headline(info["warning"]), width_px, scale)
-        out["select"] = bool(st is not None and st.warnings) and problems.on_base_mesh(obj, mod)
+        # a warning naming no element (fairing_skipped, thin_part) has nothing to select
+        out["select"] = st is not None and any(w.indices or w.edges for w in st.warnings) \
+            and problems.on_base_mesh(obj, mod)
     try:
         settings = gn.read_settings(mod)
     except ValueError:

@@ -43,6 +43,7 @@ from .repair import MeshWarning, repair_mesh
 from .rings import data_rings
 from .stencil import Stencil
 from .surface_inputs import check_settings, face_points, points, positive, unit_normals
+from .thin_parts import thin_part_samples, thin_part_warning
 from .topology import MeshTopology
 from .validation import check_finite
 
@@ -263,8 +264,16 @@ class BlendingSurface:
     def warnings(self) -> tuple:
         """What the repair changed (:class:`gerbs_core.mesh.repair.MeshWarning`, ordered),
         then the kept vertices given a zero normal (tag ``zero_normal``, no Hermite normal
-        there)."""
-        return self._warnings
+        there), a skipped fairing (``fairing_skipped``) and a surface bulging far beyond its
+        cage (``thin_part``, :mod:`gerbs_core.mesh.thin_parts`: read on first access from
+        the surface at resolution 4, or 2 on a large mesh)."""
+        return self._warnings + self._thin_part
+
+    @cached_property
+    def _thin_part(self) -> tuple:
+        S = thin_part_samples(self)
+        w = thin_part_warning(self._X, S)
+        return () if w is None else (w,)
 
     @property
     def coefficients(self) -> np.ndarray:
@@ -276,7 +285,8 @@ class BlendingSurface:
         Refused as the constructor refuses them: InvalidParameterError (shape),
         InvalidMeshError ``non_finite`` naming the rows with NaN or infinite coordinates."""
         new = object.__new__(BlendingSurface)
-        new.__dict__.update({k: v for k, v in self.__dict__.items() if k != "eps0"})
+        new.__dict__.update({k: v for k, v in self.__dict__.items()
+                             if k not in ("eps0", "_thin_part")})
         X = points("vertices", vertices, len(self.repair.representative))
         check_finite(X, "vertices")
         new._X = self.repair.positions(X)

@@ -129,3 +129,32 @@ def test_the_warning_line_selects_what_the_repair_changed(blender):
     bm = bmesh.from_edit_mesh(obj.data)
     assert [v.index for v in bm.verts if v.select] == [3]
     bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_a_thin_part_warns_in_the_panel_with_nothing_to_select(blender):
+    """Blender's Cube scaled to a 2 x 2 x 0.2 board and the scale applied: the surface
+    bulges to 3.3x the board's thickness (a known limit); the warning line says so and what
+    helps, the Select button is not offered (the warning names no element), and a Bevel
+    modifier below the cage's edges (2 segments) clears it."""
+    from blender_addon import api, panels
+
+    bpy.ops.mesh.primitive_cube_add()
+    obj = bpy.context.active_object
+    obj.scale = (1.0, 1.0, 0.1)
+    bpy.ops.object.transform_apply(scale=True)
+    mod = api.add_surface(obj, resolution=4)
+    status = api.status(obj)
+    assert status["error"] == ""
+    assert "3.3x the cage's extent along z" in status["warning"]
+    assert "bevelling the edges" in status["warning"]
+    rows = panels.panel_rows(obj, mod, width_px=400.0)
+    assert rows["warning"] and not rows["select"]
+    assert [w.type for w in mod.node_warnings] == ["WARNING"]
+    # a Bevel above GERBS: the surface stays near the cage, no warning
+    bevel = obj.modifiers.new("Bevel", "BEVEL")
+    bevel.segments, bevel.width = 2, 0.05
+    bpy.ops.object.modifier_move_to_index(modifier="Bevel", index=0)
+    P = np.array([v.co[:] for v in obj.evaluated_get(
+        bpy.context.evaluated_depsgraph_get()).data.vertices])
+    assert np.ptp(P[:, 2]) < 1.7 * 0.2
+    assert api.status(obj)["warning"] == "" and not mod.node_warnings
