@@ -49,15 +49,32 @@ def test_penalty_gradient_matches_finite_differences():
     assert np.abs(num - bad).max() > 1e-3 * np.abs(G).max()
 
 
-def test_penalty_of_a_few_moving_points_matches_finite_differences():
-    # the production path: unknowns z (2, 3) move three of nine points through a sparse
-    # factor (one point by both unknowns); the triangles without a moving point keep the
-    # normals of P0, computed once
-    rng = np.random.default_rng(5)
+def _moving_points(seed):
+    """(rng, nine points, seven triangles, their pairs (a, b), a sparse factor E (9, 2) by
+    which two unknowns move three of the points, one of them by both)."""
+    rng = np.random.default_rng(seed)
     pts = rng.normal(size=(9, 3))
     tris = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4], [3, 5, 4], [1, 6, 3], [6, 7, 3], [7, 8, 3]])
     a, b = triangle_pairs(tris)
     E = sp.csr_matrix(([1.0, 0.5, -0.7, 2.0], ([2, 2, 6, 8], [0, 1, 1, 0])), shape=(9, 2))
+    return rng, pts, tris, a, b, E
+
+
+def _central_differences(pen, z0):
+    num = np.zeros_like(z0)
+    for i in range(z0.shape[0]):
+        for j in range(3):
+            e = np.zeros_like(z0)
+            e[i, j] = 1e-6
+            num[i, j] = (pen(z0 + e)[0] - pen(z0 - e)[0]) / 2e-6
+    return num
+
+
+def test_penalty_of_a_few_moving_points_matches_finite_differences():
+    # the production path: unknowns z (2, 3) move three of nine points through a sparse
+    # factor (one point by both unknowns); the triangles without a moving point keep the
+    # normals of P0, computed once
+    rng, pts, tris, a, b, E = _moving_points(5)
     pen = _Penalty(pts, E, tris, a, b, 0.95)
     assert 0 < pen.m < len(tris)                      # some triangles fixed, some moving
     z0 = rng.normal(scale=0.1, size=(2, 3))
@@ -65,12 +82,7 @@ def test_penalty_of_a_few_moving_points_matches_finite_differences():
     assert F > 0
     # the same penalty as on the moved points themselves
     assert F == pytest.approx(turn_penalty(pts + E @ z0, tris, a, b, 0.95)[0], rel=1e-12)
-    num = np.zeros_like(z0)
-    for i in range(2):
-        for j in range(3):
-            e = np.zeros_like(z0)
-            e[i, j] = 1e-6
-            num[i, j] = (pen(z0 + e)[0] - pen(z0 - e)[0]) / 2e-6
+    num = _central_differences(pen, z0)
     assert np.abs(num - G).max() <= 1e-7 * np.abs(G).max()
     bad = G.copy()
     bad[1] *= -1                                       # the control: one unknown's sign
@@ -80,11 +92,7 @@ def test_penalty_of_a_few_moving_points_matches_finite_differences():
 def test_stay_term_value_and_gradient():
     # the stay: sum_p stay_p |(E z)_p|^2 on top of the turn penalty, and its gradient
     # 2 E^T (stay E z); at z = 0 it adds nothing
-    rng = np.random.default_rng(7)
-    pts = rng.normal(size=(9, 3))
-    tris = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4], [3, 5, 4], [1, 6, 3], [6, 7, 3], [7, 8, 3]])
-    a, b = triangle_pairs(tris)
-    E = sp.csr_matrix(([1.0, 0.5, -0.7, 2.0], ([2, 2, 6, 8], [0, 1, 1, 0])), shape=(9, 2))
+    rng, pts, tris, a, b, E = _moving_points(7)
     stay = rng.uniform(0.5, 3.0, size=9)
     pen, bare = _Penalty(pts, E, tris, a, b, 0.95, stay), _Penalty(pts, E, tris, a, b, 0.95)
     assert pen(np.zeros((2, 3)))[0] == bare(np.zeros((2, 3)))[0]
@@ -92,12 +100,7 @@ def test_stay_term_value_and_gradient():
     F, G = pen(z0)
     d = E @ z0
     assert F == pytest.approx(bare(z0)[0] + float(np.sum(stay[:, None] * d * d)), rel=1e-12)
-    num = np.zeros_like(z0)
-    for i in range(2):
-        for j in range(3):
-            e = np.zeros_like(z0)
-            e[i, j] = 1e-6
-            num[i, j] = (pen(z0 + e)[0] - pen(z0 - e)[0]) / 2e-6
+    num = _central_differences(pen, z0)
     assert np.abs(num - G).max() <= 1e-7 * np.abs(G).max()
     # the control: the turn's gradient alone misses the stay's part
     assert np.abs(num - bare(z0)[1]).max() > 1e-3 * np.abs(G).max()
