@@ -21,8 +21,8 @@ that resolution, obtuse faces flipped --, h_v the star's scale, delta S(p) how f
 correction moves the point p of rest face f_p: every term is dimensionless, so the rule is
 scale invariant). The last term (``rule.turn_stay``) keeps the correction from inflating a
 thin part, which turns less when it is fatter: Blender's Cube scaled to a 4 x 0.5 x 0.2
-plank came out 10x its thickness without it, 3.3x with it. The unknowns are the delta c of the
-corners of the faces holding a pair beyond the bound and of their ring 1; they fall into
+plank came out 10x its thickness without it, 3.3x with it. The unknowns are the delta c of
+the corners of the faces holding a pair beyond the bound and of their ring 1; they fall into
 regions (connected in ring 1), each optimised alone by L-BFGS (scipy) over every pair of
 lattice triangles it can change (run again, up to ``RESTARTS`` times, while the region
 still has a pair beyond 90 degrees), one region after another on the points the previous
@@ -514,9 +514,10 @@ def _fair_region(P, E, T, A, B, cos0, rule, stay=None):
 class _Penalty:
     """The turn penalty sum over the pairs (A, B) of lattice triangles T (t, 3) of
     max(0, cos0 - n_A . n_B)^2, plus sum_p stay_p |(Es z)_p|^2 with ``stay`` (N,) >= 0 (None:
-    no such term), as a function of the unknowns z (n, 3): points P0 (N, 3) + Es (N, n) z. Only the triangles having a point that Es moves (a stored entry in its
-    row) are recomputed per call (the first m of the pairs' triangles, in this order); the
-    others keep their normals at z = 0. Coordinates are rows ((3, k) arrays)."""
+    no such term), as a function of the unknowns z (n, 3): points P0 (N, 3) + Es (N, n) z.
+    Only the triangles having a point that Es moves (a stored entry in its row) are
+    recomputed per call (the first m of the pairs' triangles, in this order); the others
+    keep their normals at z = 0. Coordinates are rows ((3, k) arrays)."""
 
     def __init__(self, P0, Es, T, A, B, cos0, stay=None):
         tris, inv = _compact(np.concatenate([A, B]), len(T))

@@ -45,10 +45,10 @@ def thin_part_warning(cage, surface_points):
     """A ``thin_part`` :class:`gerbs_core.mesh.repair.MeshWarning` (no indices) or None.
 
     cage (V, 3) the positions; surface_points (N, 3) points of the surface
-    (:func:`thin_part_samples`). Warns where on some axis the points' extent (with the cage's) exceeds
-    ``BULGE`` times the cage's and the excess is more than ``SIGNIFICANT`` of the cage's
-    largest extent (a slightly wavy sheet, whose cage is flat but for a small height,
-    does not warn)."""
+    (:func:`thin_part_samples`). Warns where on some axis the points' extent (with the
+    cage's) exceeds ``BULGE`` times the cage's and the excess is more than ``SIGNIFICANT``
+    of the cage's largest extent (a slightly wavy sheet, whose cage is flat but for a small
+    height, does not warn)."""
     C = np.asarray(cage, dtype=np.float64)
     S = np.concatenate([C, np.asarray(surface_points, dtype=np.float64).reshape(-1, 3)])
     cage_ext, ext = np.ptp(C, axis=0), np.ptp(S, axis=0)
