@@ -45,7 +45,7 @@ from figures import gerbs  # noqa: E402
 BLENDER_FIGURES = ("suzanne", "icosphere", "mixed", "zebra_subsurf", "zebra_kinked",
                    "zebra_crease",
                    "zebra_peers_suzanne", "zebra_peers_torus", "zebra_peers_cylinder",
-                   "zebra_peers_coin", "zebra_peers_bevel")
+                   "zebra_peers_coin", "zebra_peers_bevel", "zebra_peers_board")
 PLOT_FIGURES = ("kernels", "partition", "convergence")
 ALL_FIGURES = BLENDER_FIGURES + PLOT_FIGURES
 
@@ -130,6 +130,14 @@ def _coin():
     return cylinder(depth=0.2)
 
 
+def _board():
+    """Blender's Cube scaled to a 2 x 2 x 0.2 board (the scale applied): a known limit."""
+    from gerbs_core.datasets.primitives import cube
+
+    v, f = cube()
+    return v * np.array([1.0, 1.0, 0.1]), f
+
+
 def _bevel():
     """Blender's Cube with its Bevel modifier applied (2 segments, width 0.2): a known limit."""
     import bpy
@@ -147,6 +155,7 @@ PEER_SCENES = {
     "zebra_peers_cylinder": dict(mesh=_cylinder, view=(0.9, -1.5, 1.0), stripes=10.0, zoom=0.9),
     "zebra_peers_coin": dict(mesh=_coin, view=(1.0, -1.6, 0.45), stripes=10.0, zoom=0.9),
     "zebra_peers_bevel": dict(mesh=_bevel, view=(1.0, -1.5, 0.9), stripes=10.0, zoom=0.9),
+    "zebra_peers_board": dict(mesh=_board, view=(1.0, -1.6, 0.6), stripes=10.0, zoom=0.9),
 }
 PEER_LEVEL = (3, 1)
 

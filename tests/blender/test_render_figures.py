@@ -55,7 +55,8 @@ def test_every_figure_is_a_non_uniform_png(rendered, name):
 ZEBRA_GRIDS = (("zebra_subsurf", 1, 2), ("zebra_kinked", 2, 2), ("zebra_crease", 1, 2),
                ("zebra_peers_suzanne", 1, 3),
                ("zebra_peers_torus", 1, 3), ("zebra_peers_cylinder", 1, 3),
-               ("zebra_peers_coin", 1, 3), ("zebra_peers_bevel", 1, 3))
+               ("zebra_peers_coin", 1, 3), ("zebra_peers_bevel", 1, 3),
+               ("zebra_peers_board", 1, 3))
 
 
 @pytest.mark.parametrize("name, rows, cols", ZEBRA_GRIDS)
