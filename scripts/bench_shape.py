@@ -19,7 +19,8 @@ also at 2r: the "@16" rows); real meshes (examples/suzanne.obj, MeshLab's cow,
 airplane, bone, and bunny10k with ``--only bunny10k`` or ``--only real``: it
 adds about a minute; also Catmull-Clark level 2 there, the acceptance's
 reference); with ``--only proportions``, Blender's Cylinder as a coin (depth 0.2), a
-tower (depth 10) and with three loop cuts, with ``--only bevel`` Blender's Cube with its
+tower (depth 10) and with three loop cuts, and Blender's Cube scaled to a 2 x 2 x 0.2 board
+and a 4 x 0.5 x 0.2 plank, with ``--only bevel`` Blender's Cube with its
 Bevel modifier applied (1, 2 and 4 segments of width 0.2, and 2 of width 0.05), with
 ``--only extrusions`` an L-shaped slab extruded 0.5 and the Cube with an inset top extruded
 (none of these groups in the default run, nor in the acceptance: GERBS's known limits,

@@ -131,11 +131,13 @@ def _coin():
 
 
 def _board():
-    """Blender's Cube scaled to a 2 x 2 x 0.2 board (the scale applied): a known limit."""
+    """Blender's Cube scaled to a 2 x 2 x 0.2 board (the scale applied): a known limit
+    (bench_shape's input ``board``)."""
     from gerbs_core.datasets.primitives import cube
+    from shape.inputs import SCALED_CUBES
 
     v, f = cube()
-    return v * np.array([1.0, 1.0, 0.1]), f
+    return v * np.array(SCALED_CUBES["board"]), f
 
 
 def _bevel():

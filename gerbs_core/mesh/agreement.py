@@ -120,10 +120,10 @@ class FairnessRule:
     # its rest face's area. Without it the cheapest way to turn less is to inflate a thin
     # part: measured (bench_shape --only proportions,extrusions, r = 8), Blender's Cube scaled
     # to a 4 x 0.5 x 0.2 plank 1.02 / 3.73 / 10.0 of the cage's box -> 1.04 / 1.77 / 3.32
-    # at 0.03, a 2 x 2 x 0.2 slab 1.23 / 1.23 / 3.05 -> 1.09 / 1.09 / 3.28, the L slab with
+    # at 0.03, a 2 x 2 x 0.2 board 1.23 / 1.23 / 3.05 -> 1.09 / 1.09 / 3.28, the L slab with
     # support loops 1.20 / 1.20 / 1.32 -> 1.14 / 1.13 / 1.17; Suzanne 0 / 0 / 37 -> 0 / 0 / 39
     # (zebra 167 / 700 -> 167 / 695), the cow 14 / 0 / 82 -> 14 / 0 / 83, bunny10k 6 / 0 / 74
-    # -> 7 / 0 / 77. 0.1 takes the slab to 2.70 in z but Suzanne at r = 4 from 46 to 70
+    # -> 7 / 0 / 77. 0.1 takes the board to 2.70 in z but Suzanne at r = 4 from 46 to 70
     # pairs above 60 degrees (53 at 0.03); 0.3 lets the cow fold (20 / 1 / 111); every input
     # that is not faired is unchanged (docs/design.md "Fairing")
     turn_stay: float = 0.03

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .lattice import output_counts
 from .repair import MeshWarning
 
 __all__ = ["BULGE", "SIGNIFICANT", "MAX_POINTS", "thin_part_samples", "thin_part_warning"]
@@ -31,8 +32,6 @@ def thin_part_samples(surface) -> np.ndarray:
     """(N, 3) points of a :class:`gerbs_core.mesh.surface.BlendingSurface` on its lattice at
     resolution 4, or 2 where that has more than MAX_POINTS points or exceeds the surface's
     memory budget; (0, 3) where 2 exceeds it too (nothing is read: no warning)."""
-    from .lattice import output_counts
-
     for r in (4, 2):
         if (r == 2 or output_counts(surface.topology, r)[0] <= MAX_POINTS) \
                 and surface.memory_estimate(r) <= surface.memory_budget:

@@ -42,7 +42,7 @@ PROPORTIONS = {"coin": ({"depth": 0.2}, 0), "tower": ({"depth": 10.0}, 0),
                "cylinder-cuts": ({}, 3)}
 # Blender's Cube scaled as a modeller makes a board or a plank (Object > Apply > Scale):
 # name -> the scale of its x, y, z (not in the default run: ``--only proportions``)
-SCALED_CUBES = {"slab": (1.0, 1.0, 0.1), "plank": (2.0, 0.25, 0.1)}
+SCALED_CUBES = {"board": (1.0, 1.0, 0.1), "plank": (2.0, 0.25, 0.1)}
 # Blender's Cube with its Bevel modifier applied, as a modeller rounds a box's edges before
 # subdividing (not in the default run, nor in the acceptance: ``--only bevel``): name ->
 # (segments, width). Every edge of such a cage turns 90 / segments degrees, below the

@@ -98,7 +98,7 @@ def test_unknown_input_is_refused(tmp_path):
 def test_proportions_are_blenders_cylinder_in_other_proportions(monkeypatch):
     """The ``proportions`` inputs (docs/design.md, "Known limits") are what they claim:
     the coin 0.2 deep, the tower 10 deep, the loop-cut Cylinder in 4 rows of side quads,
-    each a closed Cylinder of radius 1 with two 32-gon caps; the slab and the plank
+    each a closed Cylinder of radius 1 with two 32-gon caps; the board and the plank
     Blender's Cube (2 wide) scaled to 2 x 2 x 0.2 and 4 x 0.5 x 0.2; none in the default
     run."""
     import bpy
@@ -108,8 +108,8 @@ def test_proportions_are_blenders_cylinder_in_other_proportions(monkeypatch):
     from shape import inputs
 
     cases = {c.name: c for c in inputs.build_cases(bpy, inputs.expand(["proportions"]), [])}
-    assert set(cases) == {"coin", "tower", "cylinder-cuts", "slab", "plank"}
-    for name, size in (("slab", (2.0, 2.0, 0.2)), ("plank", (4.0, 0.5, 0.2))):
+    assert set(cases) == {"coin", "tower", "cylinder-cuts", "board", "plank"}
+    for name, size in (("board", (2.0, 2.0, 0.2)), ("plank", (4.0, 0.5, 0.2))):
         V, F = cases[name].V, cases[name].F
         assert np.ptp(V, axis=0) == pytest.approx(size, abs=1e-6)
         assert len(V) == 8 and sorted(len(f) for f in F) == [4] * 6
