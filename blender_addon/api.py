@@ -116,10 +116,15 @@ def get_settings(obj, mod=None) -> dict:
 
 
 def update(obj, *, force: bool = False, progress=None, raise_errors: bool = True):
-    """Sync `obj`'s GERBS modifier now (force: rebuild and rebind rest lengths)."""
+    """Sync `obj`'s GERBS modifier now (force: rebuild and rebind rest lengths).
+
+    Tags nothing itself: a sync that writes a result tags what it wrote (the result
+    object, the modifier's messages), and one that changes nothing must not tag the object,
+    which would make Blender share the mesh's arrays with a fresh evaluated copy again and
+    move them on the script's next access (held ``mesh.vertices[i]`` would then point at
+    freed memory; tests/blender/test_held_references.py)."""
     _modifier(obj)
     outcome = handlers.sync_now(obj, force=force, progress=progress)
-    obj.update_tag()
     _raise_if_error(outcome, raise_errors)
     return outcome
 

@@ -437,7 +437,10 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
         set_render_error(obj, mod, "")
     else:
         set_error(obj, mod, "", format_warnings(st.warnings))
-    obj.update_tag()
+    # no obj.update_tag(): the writes above tagged the result object, whose change
+    # re-evaluates this object through the node group's Object Info; a tag of the object
+    # would make Blender share its mesh's arrays with a new evaluated copy, and the
+    # script's next access would move them (held references: test_held_references.py)
     progress(1.0, "done")
     return SyncResult("rebuilt")
 

@@ -115,3 +115,40 @@ def test_held_bmesh_vertex_drag_in_edit_mode(blender):
     assert v.co.z == z
     bpy.ops.object.mode_set(mode="OBJECT")
     _check_surface(obj, 0, z)
+
+
+def _pointer(obj, k: int) -> int:
+    return obj.data.vertices[k].as_pointer()  # a fresh access, as scripts make them
+
+
+def test_syncs_that_change_nothing_and_rebuilds_leave_the_arrays_where_they_are(blender):
+    """api.update (a sync that finds nothing to do) and api.update(force=True) (a rebuild)
+    tag nothing of the base object: a tag would make Blender share the mesh's arrays with
+    a fresh evaluated copy, and the script's next access of ``mesh.vertices`` would move
+    them (copy-on-write), leaving a held vertex pointing at freed memory. Found by a
+    newcomer's script: after two api.update calls a held vertex read (0, 1e-45, 6e-45) on
+    the Cube and a write through it was lost. The control shows the check catches it: a tag
+    of the object, then the same evaluation and access, moves the array."""
+    from blender_addon import api
+
+    obj = make_object("suzanne")
+    api.add_surface(obj, resolution=2)
+    v = obj.data.vertices[5]
+    where = v.as_pointer()
+    for force in (False, False, True, True, False):
+        api.update(obj, force=force)
+        bpy.context.view_layer.update()
+        assert _pointer(obj, 0) and _pointer(obj, 5) == where
+    assert api.status(obj)["error"] == ""
+    z = float(np.float32(v.co.z + 1.0))
+    v.co.z += 1.0  # through the held reference: kept
+    bpy.context.view_layer.update()
+    assert obj.data.vertices[5].co.z == z
+    assert np.abs(evaluated(obj)[5] - positions(obj.data)[5]).max() <= 1e-6
+    # control: what the removed tags did
+    moved = []
+    for _ in range(2):
+        obj.update_tag()
+        bpy.context.view_layer.update()
+        moved.append(_pointer(obj, 5) != where)
+    assert any(moved)
