@@ -117,7 +117,9 @@ def parse_args(argv):
                         "(angle between their normals, 0..180): sharp mesh edges stay sharp")
     p.add_argument("--sharp-creases", action="store_true",
                    help="fully crease the edges the importer marks sharp (OBJ smoothing "
-                        "groups, glTF split normals)")
+                        "groups) or whose faces' normals differ at a shared corner (glTF "
+                        "split normals; with --merge-distance, which welds the seams "
+                        "first)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     args.default_output = args.output is None  # only the default's folder is made
@@ -292,10 +294,77 @@ def edge_angles(mesh):
     return out
 
 
-def mark_creases(bpy, obj, angle=None, sharp=False) -> int:
+def corner_normals(mesh):
+    """(C, 3) float64 normals of the corners of an evaluated mesh (the file's split normals
+    where the importer set custom normals)."""
+    import numpy as np
+    return _get(mesh.corner_normals, "vector", len(mesh.loops), np.float32, 3).astype(np.float64)
+
+
+def weld(bpy, obj, distance: float):
+    """Weld the vertices of the imported `obj` (the script's own copy, never the file)
+    closer than `distance` (Blender's Merge by Distance, ``bmesh.ops.remove_doubles``),
+    before creases are measured: an exporter's split seams (glTF splits every vertex where
+    normals or UVs differ, so a cube arrives as six separate quads) leave no edge between
+    two faces to measure. Returns the corner normals before the weld (C, 3), which are the
+    file's (after it Blender re-derives custom normals in the welded fans); the weld keeps
+    the faces and their corners in order."""
+    import bmesh
+    normals = corner_normals(obj.data.evaluated_get(bpy.context.evaluated_depsgraph_get()))
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    bmesh.ops.remove_doubles(bm, verts=bm.verts, dist=distance)
+    bm.to_mesh(obj.data)
+    bm.free()
+    obj.data.update()
+    return normals
+
+
+def split_normal_edges(mesh, normals, degrees: float = 1.0):
+    """(E,) bool: the edges of two faces whose corners at either end carry normals more than
+    `degrees` apart (split normals: the file's hard edges), from the corner normals
+    ``normals`` (C, 3) of `mesh` (an evaluated mesh, the corners in its order)."""
+    import numpy as np
+    E, F, C = len(mesh.edges), len(mesh.polygons), len(mesh.loops)
+    size = _get(mesh.polygons, "loop_total", F, np.int32)
+    start = _get(mesh.polygons, "loop_start", F, np.int32)
+    face = np.repeat(np.arange(F), size)
+    prev = np.arange(C) - 1
+    prev[start] = start + size - 1                  # each face's first corner: its last
+    edge = _get(mesh.attributes[".corner_edge"].data, "value", C, np.int32)
+    vert = _get(mesh.attributes[".corner_vert"].data, "value", C, np.int32)
+    # every corner meets two of its face's edges: (edge, vertex, face, corner) twice
+    e = np.concatenate([edge, edge[prev]])
+    v, f, c = np.tile(vert, 2), np.tile(face, 2), np.tile(np.arange(C), 2)
+    order = np.lexsort((f, v, e))
+    e, v, c = e[order], v[order], c[order]
+    key = e.astype(np.int64) * len(mesh.vertices) + v
+    start = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    count = np.diff(np.r_[start, len(key)])
+    two = start[count == 2]                         # an edge end shared by two faces
+    n1, n2 = normals[c[two]], normals[c[two + 1]]
+    cos = np.einsum("ij,ij->i", n1, n2) / np.maximum(
+        np.linalg.norm(n1, axis=1) * np.linalg.norm(n2, axis=1), 1e-300)
+    out = np.zeros(E, bool)
+    out[e[two[cos < np.cos(np.radians(degrees))]]] = True
+    return out
+
+
+def _split_seams(mesh) -> bool:
+    """Whether vertices of `mesh` (the imported copy) share positions: a file split at its
+    seams (glTF exporters split every vertex where normals or UVs differ)."""
+    import numpy as np
+    V = len(mesh.vertices)
+    P = _get(mesh.vertices, "co", V, np.float32, 3)
+    return V > 0 and len(np.unique(P, axis=0)) < V
+
+
+def mark_creases(bpy, obj, angle=None, sharp=False, normals=None) -> int:
     """Fully crease (Blender's ``crease_edge`` = 1) the edges of the imported `obj` whose
-    dihedral angle exceeds `angle` degrees and, with `sharp`, those marked sharp; creases
-    the file brought along are kept. Read from the evaluated mesh; returns the count."""
+    dihedral angle exceeds `angle` degrees and, with `sharp`, those marked sharp or whose
+    two faces' split normals differ (``normals``: the file's corner normals (C, 3), from
+    :func:`weld`; else the mesh's own); creases the file brought along are kept. Read from
+    the evaluated mesh; returns the count."""
     import numpy as np
     mesh = obj.data.evaluated_get(bpy.context.evaluated_depsgraph_get())
     E = len(mesh.edges)
@@ -307,6 +376,8 @@ def mark_creases(bpy, obj, angle=None, sharp=False) -> int:
     flag = mesh.attributes.get("sharp_edge")
     if sharp and flag is not None:
         full |= _get(flag.data, "value", E, bool)
+    if sharp and mesh.has_custom_normals:
+        full |= split_normal_edges(mesh, corner_normals(mesh) if normals is None else normals)
     w = np.where(full, np.float32(1.0), w)
     attr = obj.data.attributes.get("crease_edge") or \
         obj.data.attributes.new("crease_edge", "FLOAT", "EDGE")
@@ -392,9 +463,15 @@ def run(args, src: Path, out: Path, protected) -> None:
             raise UserError(f"{args.input} contains no mesh")
         for obj in objects:
             if args.crease_angle is not None or args.sharp_creases:
-                n = mark_creases(bpy, obj, args.crease_angle, args.sharp_creases)
-                if not args.quiet:
-                    print(f"{obj.name}: {n} edges creased", file=sys.stderr)
+                # welded first: an exporter's split seams leave no edge between two faces
+                normals = None if args.merge_distance is None else \
+                    weld(bpy, obj, args.merge_distance)
+                n = mark_creases(bpy, obj, args.crease_angle, args.sharp_creases, normals)
+                seams = "" if n or normals is not None or not _split_seams(obj.data) else (
+                    " (vertices share positions: the file is split at its seams, as glTF "
+                    "exporters write it; --merge-distance 0 welds them first)")
+                if not args.quiet or seams:
+                    print(f"{obj.name}: {n} edges creased{seams}", file=sys.stderr)
             if args.shading == "smooth":
                 # the imported copy, never the file: its faces' flat shading ("s 0", a
                 # flat-shaded export) would otherwise reach every output face

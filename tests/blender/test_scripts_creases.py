@@ -71,3 +71,35 @@ def test_bad_crease_angle_is_one_error_line(tmp_path, value):
     assert out.returncode == 2
     assert out.stderr.strip().splitlines()[-1].startswith("error: --crease-angle")
     assert not (tmp_path / "x.obj").exists()
+
+
+def test_gltf_creases_are_measured_after_the_weld(blender, tmp_path):
+    """A glTF arrives split at every seam (Blender's Cube as six separate quads, each two
+    triangles): without --merge-distance no edge joins two faces of different sides, so
+    nothing is creased and the line says why; with it the copy is welded first and the
+    cube's 12 edges are creased, by angle and by the file's split normals alike. A
+    smooth-by-angle Cylinder's split normals crease its 64 rim edges and none of the 32
+    side edges, whose normals are shared (the control)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.mesh.primitive_cube_add(size=2.0)
+    bpy.ops.export_scene.gltf(filepath=str(tmp_path / "cube.glb"), use_selection=True)
+    bpy.ops.object.delete()
+    bpy.ops.mesh.primitive_cylinder_add()
+    bpy.ops.object.shade_smooth_by_angle(angle=0.6)
+    bpy.ops.export_scene.gltf(filepath=str(tmp_path / "cyl.glb"), use_selection=True)
+    src = tmp_path / "cube.glb"
+    out = run([SCRIPT, src, "-o", tmp_path / "a.obj", "--resolution", "3", "--quiet",
+               "--crease-angle", "30"], cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "0 edges creased (vertices share positions" in out.stderr
+    assert "--merge-distance 0 welds them" in out.stderr
+    for option in (["--crease-angle", "30"], ["--sharp-creases"]):
+        out = run([SCRIPT, src, "-o", tmp_path / "c.obj", "--resolution", "3",
+                   "--merge-distance", "0", *option], cwd=tmp_path)
+        assert out.returncode == 0, out.stderr
+        assert "Cube: 12 edges creased" in out.stderr, option
+        assert _cube_distance(_result(tmp_path / "c.obj")).max() <= 1e-5
+    out = run([SCRIPT, tmp_path / "cyl.glb", "-o", tmp_path / "y.obj", "--resolution", "2",
+               "--merge-distance", "0", "--sharp-creases"], cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "Cylinder: 64 edges creased" in out.stderr
