@@ -329,25 +329,35 @@ def _coo_rows(vs, use, q, A, bw):
 
 def _block_rows(blocks, V, M):
     """The operator and right-hand-side csr matrices (V M, V), canonical, from the chunks'
-    rows (:func:`_compact`): all compact -- the rows' lengths known -- every value
-    scattered once from A and bw straight to its csr slot (the unused data to one spare
-    slot past the end); else every chunk as coordinates, sorted and summed by scipy."""
+    rows (:func:`_compact`): the compact chunks' rows -- their lengths known -- with every
+    value scattered once from A and bw straight to its csr slot; the other chunks' rows
+    (a vertex reached by several unfoldings) as coordinates, sorted and summed by scipy,
+    and copied into their slots. Every row is one vertex's, from one chunk: the entries
+    are those of sorting and summing all chunks' coordinates together (scipy sorts and
+    sums row by row), bit for bit. Measured on a 35k-vertex triangulated height field with
+    a boundary, where 2 of its 35 chunks are not compact: 3.1 -> 0.4 s for its rules."""
+    compact = [b for b in blocks if len(b) == 6]
+    coords = [b for b in blocks if len(b) == 4]
     shape = (V * M, V)
-    if any(len(b) == 4 for b in blocks):
-        parts = [b if len(b) == 4 else _coo_rows(b[0], b[3][:, :-1] < b[2][:, None],
-                                                 _data_ids(b), b[4], b[5]) for b in blocks]
-        rows, cols = (np.concatenate([p[i] for p in parts]) for i in (0, 1))
-        return tuple(sp.csr_matrix((np.concatenate([p[i] for p in parts]), (rows, cols)),
-                                   shape=shape) for i in (2, 3))
+    other = None
+    if coords:
+        rows, cols = (np.concatenate([p[i] for p in coords]) for i in (0, 1))
+        other = tuple(sp.csr_matrix((np.concatenate([p[i] for p in coords]), (rows, cols)),
+                                    shape=shape) for i in (2, 3))
+        if not compact:
+            return other
     nrow = np.zeros(V, dtype=np.int64)
-    for vs, _, nr, _, _, _ in blocks:
+    for vs, _, nr, _, _, _ in compact:
         nrow[vs] = nr
+    lens = np.repeat(nrow, M)
+    if other is not None:
+        lens += np.diff(other[0].indptr)
     indptr = np.zeros(V * M + 1, dtype=np.int64)
-    np.cumsum(np.repeat(nrow, M), out=indptr[1:])
+    np.cumsum(lens, out=indptr[1:])
     nnz = int(indptr[-1])
     indices = np.empty(nnz, dtype=np.int32 if V < 2 ** 31 - 1 else np.int64)
     out = [np.empty(nnz + 1), np.empty(nnz + 1)]          # + the spare slot
-    for vs, cols, nr, rank, A, bw in blocks:
+    for vs, cols, nr, rank, A, bw in compact:
         r = cols.shape[1]
         start = indptr[:-1][vs[:, None] * M + np.arange(M)]           # (K, M)
         slot = np.where(rank < nr[:, None], rank, nnz)                # (K, n + 1)
@@ -363,8 +373,18 @@ def _block_rows(blocks, V, M):
             indices[cpos.ravel()] = c.ravel()
         else:
             indices[cpos[ok]] = c[ok]
-    return (sp.csr_matrix((out[0][:nnz], indices, indptr), shape=shape),
+    if other is not None:  # the coordinate chunks' rows, as scipy made them
+        lo = np.diff(other[0].indptr)
+        r = np.flatnonzero(lo)
+        to, fr = ranges(indptr[r], lo[r]), ranges(other[0].indptr[r], lo[r])
+        indices[to] = other[0].indices[fr]
+        for o, m in zip(out, other):
+            o[to] = m.data[fr]
+    mats = (sp.csr_matrix((out[0][:nnz], indices, indptr), shape=shape),
             sp.csr_matrix((out[1][:nnz], indices.copy(), indptr.copy()), shape=shape))
+    for m in mats:
+        m.has_canonical_format = True
+    return mats
 
 
 def _data_ids(block):
