@@ -98,8 +98,10 @@ def parse_args(argv):
                    help="smooth: every output face smooth shaded (the surface is smooth; "
                         "what a viewer shows then follows its vertex normals); keep: each "
                         "output face shaded like the input face it lies in, as the modifier "
-                        "does in Blender (an OBJ with 's 0' or Blender's Monkey: flat, "
-                        "faceted) (default smooth)")
+                        "does in Blender (an OBJ with 's 0' and no normals, like the bundled "
+                        "sample: flat, faceted; Blender's OBJ importer shades every face of "
+                        "a file with vertex normals smooth, its flat look lying in split "
+                        "normals, which the surface does not carry) (default smooth)")
     for key, (label, spec) in kernel_options().items():
         integer = spec.socket_type == "NodeSocketInt"
         p.add_argument(f"--{key.replace('_', '-')}", type=int if integer else float,
@@ -126,9 +128,9 @@ def parse_args(argv):
     if args.default_output:
         args.output = Path("out") / f"{args.input.stem}_gerbs.glb"
     if args.merge_distance is not None and not args.merge_distance >= 0:  # (also NaN)
-        raise UserError(f"--merge-distance must be >= 0, got {args.merge_distance}")
+        raise UserError(f"--merge-distance: must be >= 0, got {args.merge_distance}")
     if args.crease_angle is not None and not 0 <= args.crease_angle <= 180:  # (also NaN)
-        raise UserError(f"--crease-angle must be in [0, 180] degrees, got {args.crease_angle}")
+        raise UserError(f"--crease-angle: must be in [0, 180] degrees, got {args.crease_angle}")
     return args
 
 
@@ -252,18 +254,24 @@ def import_mesh(bpy, path: Path):
     before = set(bpy.data.objects)
     ext = path.suffix.lower()
     try:
-        if ext == ".obj":
-            bpy.ops.wm.obj_import(filepath=str(path))
-        elif ext in (".gltf", ".glb"):
-            bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=False)
-        elif ext == ".ply":
-            bpy.ops.wm.ply_import(filepath=str(path))
-        else:
-            bpy.ops.wm.stl_import(filepath=str(path))
+        # the glTF importer logs its progress on standard output: not ours to show
+        with _stdout_silenced():
+            _import(bpy, ext, path)
     except RuntimeError as exc:
         from blender_addon.errors import operator_message
         raise UserError(f"cannot read {path.name}: {operator_message(exc)}") from None
     return [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
+
+
+def _import(bpy, ext: str, path: Path) -> None:
+    if ext == ".obj":
+        bpy.ops.wm.obj_import(filepath=str(path))
+    elif ext in (".gltf", ".glb"):
+        bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=False)
+    elif ext == ".ply":
+        bpy.ops.wm.ply_import(filepath=str(path))
+    else:
+        bpy.ops.wm.stl_import(filepath=str(path))
 
 
 # --- creases --------------------------------------------------------------------
@@ -524,7 +532,7 @@ def main(argv=None) -> int:
         message = " ".join(str(exc).split())  # one line, whatever the message held
         print(f"\nerror: {message}", file=sys.stderr)
         return USER_ERROR
-    print(f"wrote {out}" + (" (it replaces the file there before)" if existed else ""),
+    print(f"wrote {out}" + (" (replacing the file that was there)" if existed else ""),
           file=sys.stderr)
     return 0
 

@@ -60,7 +60,8 @@ def thin_part_warning(cage, surface_points):
     ratio = ext[k] / cage_ext[k] if cage_ext[k] > 0 else np.inf
     return MeshWarning(
         "thin_part",
-        f"the surface reaches {ratio:.1f}x the cage's extent along {'xyz'[k]}: where faces "
+        f"the surface reaches {ratio:.1f}x the cage's extent along {'xyz'[k]} (the mesh's "
+        f"own axes): where faces "
         f"are much longer than the part is thick (a board, a coin, a tower), the local "
         f"functions cannot turn 90 degrees within them; bevelling the edges (2-3 segments) "
         f"keeps the surface near the cage",

@@ -90,4 +90,4 @@ def test_replacing_an_earlier_output_is_said(tmp_path):
     again = run(SAMPLE, "--resolution", "1", "--quiet", cwd=tmp_path)
     assert again.returncode == 0, again.stderr
     out = tmp_path / "out" / "suzanne_gerbs.glb"
-    assert f"wrote {out} (it replaces the file there before)" in again.stderr
+    assert f"wrote {out} (replacing the file that was there)" in again.stderr
