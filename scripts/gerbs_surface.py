@@ -347,9 +347,9 @@ def split_normal_edges(mesh, normals, degrees: float = 1.0):
     order = np.lexsort((f, v, e))
     e, v, c = e[order], v[order], c[order]
     key = e.astype(np.int64) * len(mesh.vertices) + v
-    start = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-    count = np.diff(np.r_[start, len(key)])
-    two = start[count == 2]                         # an edge end shared by two faces
+    group = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])     # one per edge end
+    count = np.diff(np.r_[group, len(key)])
+    two = group[count == 2]                         # an edge end shared by two faces
     n1, n2 = normals[c[two]], normals[c[two + 1]]
     cos = np.einsum("ij,ij->i", n1, n2) / np.maximum(
         np.linalg.norm(n1, axis=1) * np.linalg.norm(n2, axis=1), 1e-300)
