@@ -62,6 +62,7 @@ from .blend_ragged import build_blend
 from .envelope_spline import envelope_u, reciprocal_derivs
 from .fallbacks import build_constant, build_fillet, interval_ratios
 from ..errors import InvalidParameterError, InvalidPointSetError
+from ..kernels.base import check_order
 
 __all__ = ["RadialEnvelope"]
 
@@ -278,8 +279,7 @@ class RadialEnvelope:
 
     def __call__(self, theta, nu=0):
         """rho~^(nu)(theta), nu = 0..3 (scipy style)."""
-        if nu not in (0, 1, 2, 3):
-            raise InvalidParameterError("nu", f"must be 0..3, got {nu!r}")
+        nu = check_order(nu, 3, owner="the envelope")
         return self.derivs(theta, nu)[nu]
 
     # ------------------------------------------------------------ diagnostics

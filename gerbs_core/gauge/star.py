@@ -30,6 +30,7 @@ import numpy as np
 from .envelope import TWO_PI, RadialEnvelope
 from .jet import bump_jet, polar_jet, star_gauge_jet
 from ..errors import InvalidParameterError
+from ..kernels.base import check_order
 
 __all__ = ["StarGauge", "RadialEnvelope"]
 
@@ -37,9 +38,7 @@ _SECTOR_TOL = 1e-10   # angular slack (radians, chart) on the rays of an open se
 
 
 def _check_nu(nu):
-    if isinstance(nu, bool) or nu not in (0, 1, 2):
-        raise InvalidParameterError("nu", f"must be 0, 1 or 2, got {nu!r}")
-    return int(nu)
+    return check_order(nu, 2, owner="the gauge")
 
 
 class StarGauge:

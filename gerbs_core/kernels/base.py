@@ -50,8 +50,10 @@ def as_float_array(t, name: str = "t") -> np.ndarray:
     return arr.astype(np.float64, copy=False)
 
 
-def check_order(nu, max_order: int, name: str = "nu") -> int:
-    """Validate a derivative order: an int with 0 <= nu <= max_order."""
+def check_order(nu, max_order: int, name: str = "nu", owner: str = "this kernel") -> int:
+    """Validate a derivative order: an int (Python or numpy, not a bool, not a float even
+    if whole) with 0 <= nu <= max_order; the one check of every ``nu`` of the package
+    (kernels, curves, surfaces, interpolators, gauges; `owner` names whose maximum)."""
     if isinstance(nu, (bool, np.bool_)) or not isinstance(nu, numbers.Integral):
         raise InvalidParameterError(name, f"derivative order must be an integer, got {nu!r}")
     nu = int(nu)
@@ -59,7 +61,7 @@ def check_order(nu, max_order: int, name: str = "nu") -> int:
         raise InvalidParameterError(name, f"derivative order must be >= 0, got {nu}")
     if nu > max_order:
         raise InvalidParameterError(
-            name, f"derivative order {nu} exceeds this kernel's max_order = {max_order}")
+            name, f"derivative order {nu} exceeds {owner}'s max_order = {max_order}")
     return nu
 
 

@@ -20,6 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InvalidParameterError
+from ..immutable import Immutable
 from .validation import check_finite
 
 __all__ = ["Stencil"]
@@ -48,7 +49,7 @@ def _positions(X, V: int) -> np.ndarray:
     return X
 
 
-class Stencil:
+class Stencil(Immutable):
     """The output points of a surface at one resolution as a linear map of the positions.
 
     Attributes: ``base`` B (P, V), ``mono`` E (P, V M) (csr), ``fits`` the coefficient
@@ -67,6 +68,7 @@ class Stencil:
         self.vertex_samples = lattice.vertex_sample
         self._csc = None
         self._moved = None  # (key, moved_columns) of the last moved vertices
+        self._freeze()
 
     @property
     def triangles(self) -> np.ndarray:
@@ -144,7 +146,7 @@ class Stencil:
         if self._moved is not None and self._moved[0] == key:
             return self._moved[1]
         if self._csc is None:
-            self._csc = (self.base.tocsc(), self.mono.tocsc())
+            self._cache("_csc", (self.base.tocsc(), self.mono.tocsc()))
         Bc, Ec = self._csc
         # coefficient changes on the rows the moved columns touch only (csc C: its row
         # indices; never an O(V M) pass over all coefficient rows)
@@ -155,7 +157,7 @@ class Stencil:
         cols = (Bc[:, moved] + Ec[:, rows] @ Cr).tocsr()
         hit = np.flatnonzero(np.diff(cols.indptr))
         plan = (hit, _canonical(cols[hit]))
-        self._moved = (key, plan)
+        self._cache("_moved", (key, plan))
         return plan
 
     def matrix(self) -> sp.csr_matrix:

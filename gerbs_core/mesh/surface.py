@@ -25,6 +25,8 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
+from ..immutable import Immutable
+from ..kernels.base import check_order
 from ..kernels.names import as_kernel
 from .agreement import MMAX, FairnessRule, fair_fits
 from .charts import vertex_charts
@@ -42,7 +44,8 @@ from .monomials import monomials
 from .repair import MeshWarning, repair_mesh
 from .rings import data_rings
 from .stencil import Stencil
-from .surface_inputs import check_settings, face_points, points, positive, unit_normals
+from .surface_inputs import (chart_points, check_settings, face_points, points, positive,
+                             unit_normals, vertex_index)
 from .thin_parts import thin_part_samples, thin_part_warning
 from .topology import MeshTopology
 from .validation import check_finite
@@ -104,7 +107,7 @@ def faired(model: SurfaceModel, rest, h, rule: FairnessRule, budget: float):
     return replace(model, fairing_points=points), None
 
 
-class BlendingSurface:
+class BlendingSurface(Immutable):
     """GERBS blending surface of a polygon mesh (triangles, quads, n-gons; boundaries).
 
     Parameters
@@ -202,6 +205,7 @@ class BlendingSurface:
         self._X = X
         self._X.flags.writeable = False
         self._coef = self._coefficients(X)
+        self._freeze()
 
     # ------------------------------------------------------------------ data
     @property
@@ -289,9 +293,9 @@ class BlendingSurface:
                              if k not in ("eps0", "_thin_part")})
         X = points("vertices", vertices, len(self.repair.representative))
         check_finite(X, "vertices")
-        new._X = self.repair.positions(X)
+        new._cache("_X", self.repair.positions(X))
         new._X.flags.writeable = False
-        new._coef = new._coefficients(new._X)
+        new._cache("_coef", new._coefficients(new._X))
         return new
 
     # ------------------------------------------------------------ the cover
@@ -315,9 +319,8 @@ class BlendingSurface:
     def evaluate_all(self, face_index, local_coords, nu: int = 0):
         """[S (..., 3), dS (..., 3, 2), d2S (..., 3, 2, 2)] up to nu at points of faces, in
         face layout coordinates (:mod:`gerbs_core.mesh.layout`); exact to round-off."""
-        if nu not in (0, 1, 2):
-            raise InvalidParameterError("nu", f"must be 0, 1 or 2, got {nu!r}")
-        f, x, shape = face_points(face_index, local_coords, self.topology.n_faces)
+        nu = check_order(nu, 2, owner="the surface")
+        f, x, shape = self._face_points(face_index, local_coords)
         out, eps = self._evaluate(f, x, nu)
         self._require_cover(eps)
         return [o.reshape(shape + o.shape[1:]) for o in out]
@@ -330,12 +333,22 @@ class BlendingSurface:
         """The partition of unity (eq. (73)) at face points: (vertices (N, n), Psi (N, n),
         psi (N, n)) with n the largest face size (padding: vertex -1, values 0); with
         nu = 1 also dPsi (N, n, 2)."""
-        f, x, _ = face_points(face_index, local_coords, self.topology.n_faces)
+        nu = check_order(nu, 1, owner="the partition")
+        f, x, _ = self._face_points(face_index, local_coords)
         return partition_at(self.model, f, x, nu)
+
+    def _face_points(self, face_index, local_coords):
+        """(faces (N,), points (N, 2), leading shape): checked, every point in its face's
+        layout polygon (:func:`surface_inputs.face_points`)."""
+        topo = self.model.topology
+        return face_points(face_index, local_coords, topo.n_faces,
+                           (self.layouts.corners, topo.face_offsets))
 
     def local_function(self, v: int, y, nu: int = 0):
         """l_v and its derivatives at chart points y (N, 2): [(N,3), (N,3,2), (N,3,2,2)]."""
-        y = np.atleast_2d(np.asarray(y, dtype=np.float64))
+        v = vertex_index(v, len(self.degrees))
+        nu = check_order(nu, 2, owner="a local function")
+        y = chart_points(y)
         d = int(self.degrees[v])
         mm = monomials(y, d, nu)
         C = self._coef[v, :mm[0].shape[-1]]
@@ -353,7 +366,16 @@ class BlendingSurface:
         derivatives on a spoke); default: the sector containing each point.
         """
         from .chart_eval import chart_evaluate
-        return chart_evaluate(self, v, y, nu, corner)
+        topo = self.model.topology
+        v = vertex_index(v, topo.n_vertices)
+        nu = check_order(nu, 2, owner="the surface")
+        if corner is not None:
+            star = topo.star_corners[topo.star_offsets[v]:topo.star_offsets[v + 1]]
+            if isinstance(corner, (bool, np.bool_)) or not isinstance(corner, (int, np.integer)) \
+                    or int(corner) not in set(star.tolist()):
+                raise InvalidParameterError("corner", f"must be a corner of vertex {v}'s star "
+                                            f"{sorted(star.tolist())}, got {corner!r}")
+        return chart_evaluate(self, v, chart_points(y), nu, corner)
 
     # ---------------------------------------------------------- tessellation
     def memory_estimate(self, resolution: int) -> int:

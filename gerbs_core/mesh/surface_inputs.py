@@ -11,7 +11,8 @@ from .agreement import FairnessRule
 from .charts import BOUNDARY_RULES
 from .repair import _warning as mesh_warning
 
-__all__ = ["points", "positive", "unit_normals", "check_settings", "face_points"]
+__all__ = ["points", "positive", "unit_normals", "check_settings", "face_points",
+           "vertex_index", "chart_points"]
 
 
 def points(name, a, V=None) -> np.ndarray:
@@ -80,10 +81,31 @@ def check_settings(boundary, kappa, shrink, fairness) -> FairnessRule:
     return fairness
 
 
-def face_points(face_index, local_coords, n_faces: int):
+# a face point may lie this far outside its layout polygon, relative to the face's longest
+# edge (points on an edge or at a corner computed in floating point land within it)
+OUTSIDE_TOL = 1e-9
+
+
+def _real_array(name, a) -> np.ndarray:
+    try:
+        x = np.asarray(a)
+        if x.dtype.kind not in "biuf":
+            raise TypeError
+        return x.astype(np.float64)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(name, f"must be real numbers, got {type(a).__name__}"
+                                    + (f" of dtype {np.asarray(a).dtype}"
+                                       if isinstance(a, np.ndarray) else "")) from None
+
+
+def face_points(face_index, local_coords, n_faces: int, polygons=None):
     """(faces (N,), points (N, 2), shape) of face indices broadcast against layout
-    coordinates (..., 2): finite coordinates, integer faces in [0, n_faces)."""
-    x = np.asarray(local_coords, dtype=np.float64)
+    coordinates (..., 2): finite coordinates, integer faces in [0, n_faces); with
+    ``polygons`` = (layout corners (C, 2), face offsets (F + 1,)) also every point inside
+    (or within ``OUTSIDE_TOL`` of) its face's layout polygon, which is convex and
+    counter-clockwise (:mod:`gerbs_core.mesh.layout`): outside it the surface is not
+    defined (the cover's functions extrapolate, or leave the point uncovered)."""
+    x = _real_array("local_coords", local_coords)
     if x.shape[-1:] != (2,):
         raise InvalidParameterError("local_coords", f"must have shape (..., 2), got {x.shape}")
     if not np.all(np.isfinite(x)):
@@ -97,5 +119,56 @@ def face_points(face_index, local_coords, n_faces: int):
         raise InvalidParameterError("face_index", "must be integers")
     f = f.astype(np.int64).ravel()
     if np.any((f < 0) | (f >= n_faces)):
-        raise InvalidParameterError("face_index", "out of range")
-    return f, x.reshape(-1, 2), x.shape[:-1]
+        raise InvalidParameterError("face_index", f"must lie in [0, {n_faces}), got "
+                                    f"{f[(f < 0) | (f >= n_faces)][:5].tolist()}")
+    x2 = x.reshape(-1, 2)
+    if polygons is not None and len(f):
+        out = np.flatnonzero(~_inside(f, x2, *polygons))
+        if len(out):
+            raise InvalidParameterError(
+                "local_coords", f"{len(out)} point(s) lie outside their faces (first indices "
+                f"{out[:5].tolist()}, e.g. {x2[out[0]].tolist()} in face {int(f[out[0]])}): "
+                f"points are given in the face's own layout polygon (gerbs_core.mesh.layout; "
+                f"BlendingSurface.layouts.corners), where the surface is defined")
+    return f, x2, x.shape[:-1]
+
+
+def _inside(f, x, corners, offsets):
+    """(N,) bool: point x[i] (N, 2) lies in face f[i]'s convex counter-clockwise layout
+    polygon, or within OUTSIDE_TOL of its longest edge outside it."""
+    offsets = np.asarray(offsets)
+    size = offsets[f + 1] - offsets[f]
+    ok = np.ones(len(f), bool)
+    longest = np.zeros(len(f))
+    worst = np.full(len(f), np.inf)
+    for k in range(int(size.max())):
+        has = k < size
+        a = offsets[f] + np.minimum(k, size - 1)
+        b = offsets[f] + (np.minimum(k, size - 1) + 1) % size
+        e = corners[b] - corners[a]
+        ln = np.hypot(e[:, 0], e[:, 1])
+        d = x - corners[a]
+        dist = (e[:, 0] * d[:, 1] - e[:, 1] * d[:, 0]) / np.maximum(ln, 1e-300)  # left: +
+        worst = np.where(has, np.minimum(worst, dist), worst)
+        longest = np.where(has, np.maximum(longest, ln), longest)
+    ok &= worst >= -OUTSIDE_TOL * longest
+    return ok
+
+
+def vertex_index(v, n: int) -> int:
+    """`v` as a vertex index in [0, n) (an int, not a bool; no negative wrap-around)."""
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) \
+            or not 0 <= int(v) < n:
+        raise InvalidParameterError("v", f"must be a vertex index in [0, {n}), got {v!r}")
+    return int(v)
+
+
+def chart_points(y) -> np.ndarray:
+    """(N, 2) float64 chart points from `y` (2,) or (N, 2), finite."""
+    y = np.atleast_2d(_real_array("y", y))
+    if y.ndim != 2 or y.shape[1] != 2:
+        raise InvalidParameterError("y", f"must be chart points of shape (N, 2) or (2,), got "
+                                    f"shape {np.shape(y)}")
+    if not np.all(np.isfinite(y)):
+        raise InvalidParameterError("y", "must be finite")
+    return y

@@ -12,6 +12,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError
+from ..immutable import Immutable
+from ..kernels.base import check_order
 from ..kernels.names import as_kernel
 from . import budget as _budget
 from . import covers as _covers
@@ -29,7 +31,7 @@ from .taylor import averaged_taylor, coefficient_tables, estimate_derivatives
 __all__ = ["GERBSInterpolator"]
 
 
-class GERBSInterpolator:
+class GERBSInterpolator(Immutable):
     """Smooth Hermite interpolant of scattered data in R^n (scipy style).
 
     Parameters
@@ -101,13 +103,15 @@ class GERBSInterpolator:
         pts, tree = check_points(points, "points", min_points=1, return_tree=True)
         tree = cKDTree(pts) if tree is None else tree     # the one tree of the points
         N, n = pts.shape
+        pts.flags.writeable = False                       # a copy: the caller's is untouched
         self.points, self.n, self._tree = pts, n, tree
         self._points_t = np.ascontiguousarray(pts.T)     # coordinate-major, for gathers
         self.kernel = as_kernel(kernel)
         self.fill_value = fill_value
+        if isinstance(chunk_size, (bool, np.bool_)) or not isinstance(chunk_size, (int, np.integer)) \
+                or not chunk_size >= 1:
+            raise InvalidParameterError("chunk_size", f"must be an integer >= 1, got {chunk_size!r}")
         self.chunk_size = int(chunk_size)
-        if not self.chunk_size >= 1:
-            raise InvalidParameterError("chunk_size", f"must be >= 1, got {chunk_size!r}")
         self.memory_budget = float(memory_budget)
         if not self.memory_budget > 0:
             raise InvalidParameterError("memory_budget", f"must be > 0 bytes, got {memory_budget!r}")
@@ -141,6 +145,7 @@ class GERBSInterpolator:
         # scalar data: T_i's coefficients also as (Q, N, 1) rows, for the values' sum
         self._coef_t = (np.ascontiguousarray(self._coef[0].transpose(2, 0, 1))
                         if self._V == 1 else None)
+        self._freeze()
 
     # ------------------------------------------------------------------
     def _setup_cover(self, cover, basis, metric, rho, R, domain, gauge_kw):
@@ -198,7 +203,7 @@ class GERBSInterpolator:
         if self.cover_kind == "balls":
             return self.cover.rho
         if self._rho is None:
-            self._rho = 0.5 * np.minimum(self.cover.min_radius, self._nearest_d())
+            self._cache("_rho", 0.5 * np.minimum(self.cover.min_radius, self._nearest_d()))
         return self._rho
 
     @property
@@ -217,8 +222,8 @@ class GERBSInterpolator:
         if self.cover_kind == "delaunay":
             return delaunay_candidates(self.tri, self.simplices, x)
         if self._star_candidates is None:
-            self._star_candidates = StarCandidates(self.points, self._tree,
-                                                   self.cover.support_radius)
+            self._cache("_star_candidates", StarCandidates(self.points, self._tree,
+                                                           self.cover.support_radius))
         idx = self._star_candidates(x)
         if self.domain is not None:
             inside = _covers.in_convex_polygon(x, self.domain)
@@ -285,6 +290,8 @@ class GERBSInterpolator:
 
     def _check_x(self, x):
         x = np.asarray(x, dtype=float)
+        if self.n == 1 and (x.ndim == 0 or x.shape[-1] != 1):
+            x = x[..., None]          # in R^1 queries may be (...,), as interp1d's
         if x.ndim == 0 or x.shape[-1] != self.n:
             raise InvalidParameterError("x", f"last axis must have length n={self.n}, got shape {x.shape}")
         return x
@@ -292,7 +299,7 @@ class GERBSInterpolator:
     def _coefs(self, nu):
         """[C0, C1, C2][: nu + 1] of :func:`~gerbs_core.scattered.taylor.coefficient_tables`."""
         if len(self._coef) <= nu:
-            self._coef = coefficient_tables(self.D, self.n, 2)
+            self._cache("_coef", coefficient_tables(self.D, self.n, 2))
         return self._coef[: nu + 1]
 
     # ------------------------------------------------------------------ evaluation
@@ -302,8 +309,7 @@ class GERBSInterpolator:
         return _budget.call_estimate(int(M), self.n, self._V, nu, self._work)
 
     def __call__(self, x, nu=0):
-        if nu not in (0, 1, 2):
-            raise InvalidParameterError("nu", f"derivative order must be 0, 1 or 2, got {nu!r}")
+        nu = check_order(nu, 2, owner="the interpolator")
         if self.cover_kind == "balls":
             self.metric.check_nu(nu)
         x = self._check_x(x)

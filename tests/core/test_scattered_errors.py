@@ -124,3 +124,54 @@ def test_caller_arrays_not_modified():
     interp(x, nu=2)
     for a, c in zip((P, v, g, H, x), copies + [xc]):
         np.testing.assert_array_equal(a, c)
+
+
+@pytest.mark.parametrize("nu, text", [(1.0, "integer, got 1.0"), (np.float64(1), "integer"),
+                                      (True, "integer, got True"), (3, "max_order = 2"),
+                                      (-1, ">= 0")])
+def test_derivative_order_is_an_integer_named_nu(nu, text):
+    """Found by a review: nu=1.0 crashed inside the evaluation with a raw TypeError
+    ("can't multiply sequence by non-int"), nu=True was blamed on ``nmax``."""
+    P, v = data()
+    interp = GERBSInterpolator(P, v)
+    with pytest.raises(InvalidParameterError, match=text) as ei:
+        interp(P[:2], nu=nu)
+    assert ei.value.name == "nu"
+    assert interp(P[:2], nu=np.int64(1)).shape == (2, 2)
+
+
+@pytest.mark.parametrize("chunk", [1.5, 0, True, "8"])
+def test_chunk_size_is_a_positive_integer(chunk):
+    P, v = data()
+    with pytest.raises(InvalidParameterError, match="integer >= 1") as ei:
+        GERBSInterpolator(P, v, chunk_size=chunk)
+    assert ei.value.name == "chunk_size"
+
+
+def test_interpolators_are_immutable_and_their_points_read_only():
+    """A review set ``I.degree = 0``: the interpolant changed by 0.028 while the object's
+    data said nothing had; ``I.points`` was a writable array the evaluation ignored. Now
+    both refuse, and the caller's array stays writable (the interpolator keeps a copy)."""
+    P, v = data()
+    interp = GERBSInterpolator(P, v)
+    before = interp(P[:3] * 0.9 + 0.05)
+    for attr in ("degree", "kernel", "points", "new_name"):
+        with pytest.raises(AttributeError, match="immutable"):
+            setattr(interp, attr, 0)
+    with pytest.raises(ValueError):
+        interp.points[0, 0] = 0.5
+    assert P.flags.writeable
+    assert np.array_equal(interp(P[:3] * 0.9 + 0.05), before)
+    interp(P[:3], nu=2)             # the lazy tables of the derivatives still fill
+
+
+def test_one_dimensional_queries_may_omit_the_last_axis():
+    """In R^1 the points may be given as (N,); the queries now too, as interp1d's: (M,)
+    queries give (M,) values, the same as (M, 1)."""
+    x = np.linspace(0.0, 1.0, 12)
+    interp = GERBSInterpolator(x, np.cos(3 * x))
+    q = np.array([0.13, 0.5, 0.77])
+    assert interp(q).shape == (3,)
+    assert np.array_equal(interp(q), interp(q[:, None]))
+    assert np.abs(interp(x) - np.cos(3 * x)).max() <= 1e-12
+    assert interp(0.5).shape == ()

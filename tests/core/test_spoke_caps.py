@@ -75,8 +75,9 @@ def _with_caps(s, caps):
     m, cov = s.model, s.model.cover
     new = object.__new__(type(s))
     new.__dict__.update({k: v for k, v in s.__dict__.items() if k != "eps0"})
-    new.model = dataclasses.replace(m, cover=StarCover(cov.table, cov.corner_env,
-                                                       cov.env_offset, cov.kernel, caps))
+    new._cache("model", dataclasses.replace(m, cover=StarCover(cov.table, cov.corner_env,
+                                                               cov.env_offset, cov.kernel,
+                                                               caps)))
     return new
 
 

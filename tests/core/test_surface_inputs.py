@@ -35,8 +35,15 @@ def test_bad_settings_name_the_argument(kw, name):
     (0, [[0.0, np.nan]], "local_coords", "finite"),
     ([0, 1, 2], np.zeros((2, 2)), "face_index", "broadcast"),
     (0.5, np.zeros((2, 2)), "face_index", "integers"),
-    (6, np.zeros((2, 2)), "face_index", "out of range"),
-    (-1, np.zeros((2, 2)), "face_index", "out of range"),
+    (6, np.zeros((2, 2)), "face_index", r"must lie in \[0, 6\), got \[6, 6\]"),
+    (-1, np.zeros((2, 2)), "face_index", r"must lie in \[0, 6\), got \[-1, -1\]"),
+    (0, [["a", "b"]], "local_coords", "real numbers"),
+    # the cube's face 0 is the square [0, 2]^2 in its layout: outside it the surface is
+    # not defined (found by a review: [3, 1] extrapolated silently, [5, 5] blamed the
+    # kernel, partition gave NaN at [50, 0.2])
+    (0, [[3.0, 1.0]], "local_coords", "outside their faces"),
+    (0, [[1.0, 1.0], [5.0, 5.0]], "local_coords", r"first indices \[1\]"),
+    (0, [[50.0, 0.2]], "local_coords", "outside their faces"),
 ])
 def test_bad_face_points_name_the_argument(cube, face, coords, name, text):
     s = cube[2]
@@ -48,7 +55,7 @@ def test_bad_face_points_name_the_argument(cube, face, coords, name, text):
 
 def test_face_index_broadcasts_against_the_points(cube):
     s = cube[2]
-    x = np.array([[0.0, 0.0], [0.1, -0.05], [-0.2, 0.1]])
+    x = np.array([[0.0, 0.0], [0.1, 0.05], [0.2, 0.1]])
     one = s.evaluate(2, x)
     assert one.shape == (3, 3)
     np.testing.assert_array_equal(one, s.evaluate(np.full(3, 2), x))
@@ -105,3 +112,60 @@ def test_malformed_crease_input_names_the_argument(creases, corners, name, text)
     with pytest.raises(InvalidParameterError, match=text) as exc:
         BlendingSurface(V, F, creases=creases, corners=corners)
     assert exc.value.name == name
+
+
+def test_points_on_the_faces_edges_and_corners_are_inside(cube):
+    """The outside check's tolerance: every lattice point of every face (edges and corners
+    included, as map_to_polygon computes them) is accepted; a point 1e-6 of the face's size
+    beyond an edge is not."""
+    s = cube[2]
+    lat = s.lattice(4)
+    x = lat.map_to_polygon(s.layouts.corners)
+    assert s.evaluate(lat.face, x).shape == (lat.n_points, 3)
+    with pytest.raises(InvalidParameterError, match="outside"):
+        s.evaluate(0, [[1.0, -2e-6]])
+    assert s.evaluate(0, [[1.0, -1e-12]]).shape == (1, 3)
+
+
+@pytest.mark.parametrize("call, name, text", [
+    (lambda s: s.evaluate(0, [1.0, 1.0], nu=1.0), "nu", "integer, got 1.0"),
+    (lambda s: s.evaluate(0, [1.0, 1.0], nu=np.float64(1)), "nu", "integer"),
+    (lambda s: s.evaluate(0, [1.0, 1.0], nu=3), "nu", "max_order = 2"),
+    (lambda s: s.partition(0, [1.0, 1.0], nu=5), "nu", "max_order = 1"),
+    (lambda s: s.local_function(0, [0.1, 0.2], nu=7), "nu", "max_order = 2"),
+    (lambda s: s.local_function(-1, [0.1, 0.2]), "v", r"\[0, 8\), got -1"),
+    (lambda s: s.local_function(99, [0.1, 0.2]), "v", "got 99"),
+    (lambda s: s.local_function(1.5, [0.1, 0.2]), "v", "got 1.5"),
+    (lambda s: s.local_function(0, [0.1, 0.2, 0.3]), "y", r"shape \(1, 3\)"),
+    (lambda s: s.local_function(0, [[np.nan, 0.0]]), "y", "finite"),
+    (lambda s: s.chart_evaluate(-1, [0.1, 0.1]), "v", "got -1"),
+    (lambda s: s.chart_evaluate(0, [0.1, 0.1], corner=99), "corner", "star"),
+])
+def test_bad_derivative_orders_vertices_and_chart_points_name_the_argument(cube, call, name, text):
+    """Found by a review: nu=1.0 crashed with a raw TypeError, local_function(-1) wrapped
+    to the last vertex and dropped a third coordinate silently, nu=7 was accepted."""
+    with pytest.raises(InvalidParameterError, match=text) as exc:
+        call(cube[2])
+    assert exc.value.name == name
+
+
+def test_surfaces_and_stencils_are_immutable(cube):
+    """Attribute writes after construction raise (a review set S.kernel = 'affine': the
+    surface then reported another kernel than it used); the lazy caches still work."""
+    s = cube[2]
+    for obj, attr in ((s, "kernel"), (s, "memory_budget"), (s, "new_name")):
+        with pytest.raises(AttributeError, match="immutable"):
+            setattr(obj, attr, 1)
+    st = s.stencil(2)
+    with pytest.raises(AttributeError, match="immutable"):
+        st.base = None
+    with pytest.raises(AttributeError, match="immutable"):
+        del st.fits
+    X = s.vertices
+    P = st.apply(X)
+    moved = P.copy()
+    st.apply_moved(moved, np.array([0]), np.array([[0.1, 0.0, 0.0]]))   # fills the caches
+    X2 = X.copy()
+    X2[0, 0] += 0.1
+    assert np.abs(moved - st.apply(X2)).max() <= 1e-12
+    assert np.abs(s.with_positions(X2).tessellate(2)[0] - st.apply(X2)).max() <= 1e-12

@@ -240,7 +240,7 @@ def test_the_checks_catch_a_broken_surface():
     X, faces = primitives.mixed_mesh(0.3)
     surface = BlendingSurface(X, faces)
     broken = surface.with_positions(X)
-    broken._X = broken._X + np.array([0.0, 0.0, 1e-6])  # l_v(0) != X_v
+    broken._cache("_X", broken._X + np.array([0.0, 0.0, 1e-6]))  # l_v(0) != X_v
     try:
         check_surface(broken, X, 2, np.random.default_rng(0))
     except AssertionError:
