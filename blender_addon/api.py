@@ -21,8 +21,10 @@ Errors (all ``gerbs_core.errors.GERBSError``):
 * an invalid mesh: :class:`GERBSSyncError` (a ValueError) from
   :func:`add_surface`, :func:`update` and :func:`apply` when ``raise_errors``
   -- the modifier is kept and shows the message, the base mesh is untouched;
-* an object without the modifier (or not a mesh): :class:`NoModifierError`;
-* Apply refused by Blender (Edit Mode, a mesh used by several objects),
+* an object without the modifier (or not a mesh), or a ``mod`` that is not one of the
+  object's own GERBS modifiers: :class:`NoModifierError`;
+* Apply refused by Blender (Edit Mode, a mesh used by several objects) or below an enabled
+  modifier (Blender applies a modifier to the base mesh, not to what those above deliver),
   :func:`add_surface` on an object that already has the modifier (one per object), or
   a change (add, settings, apply, remove) of an object linked from a library (read-only:
   linked.py): :class:`OperationError` (a RuntimeError); nothing is changed.
@@ -47,10 +49,23 @@ def _mesh_object(obj):
 
 
 def _modifier(obj, mod=None):
+    """`obj`'s GERBS modifier: `mod` when given (it must be one of `obj`'s own GERBS
+    modifiers: a script passing another modifier, or another object's, must not get that
+    one changed, applied or removed), else the first."""
     _mesh_object(obj)
-    mod = mod or get_modifier(obj)
     if mod is None:
-        raise NoModifierError(f"{obj.name!r} has no {ids.MODIFIER_NAME} modifier")
+        mod = get_modifier(obj)
+        if mod is None:
+            raise NoModifierError(f"{obj.name!r} has no {ids.MODIFIER_NAME} modifier")
+        return mod
+    if not isinstance(mod, bpy.types.Modifier) or mod.id_data != obj \
+            or not gn.is_gerbs_modifier(mod):
+        what = getattr(mod, "name", None)
+        owner = getattr(getattr(mod, "id_data", None), "name", None)
+        raise NoModifierError(
+            f"{what!r} is not a {ids.MODIFIER_NAME} modifier of {obj.name!r}"
+            + (f" (it belongs to {owner!r})" if owner not in (None, obj.name) else "")
+            if what is not None else f"expected a modifier of {obj.name!r}, got {mod!r}")
     return mod
 
 
@@ -138,6 +153,15 @@ def apply(obj, mod=None) -> None:
     if obj.data.users > 1:
         raise OperationError(f"{obj.name!r}: its mesh {obj.data.name!r} is used by "
                              f"{obj.data.users} objects; make it single-user first")
+    above = [m.name for m in obj.modifiers[:list(obj.modifiers).index(mod)] if m.show_viewport]
+    if above:
+        # Blender applies a modifier to the base mesh, without those above it: the node
+        # group would then see another input than the surface's and pass it on, and the
+        # Apply would silently drop the surface (found by an adversarial test)
+        raise OperationError(f"{obj.name!r}: apply the modifier(s) above it first "
+                             f"({', '.join(repr(n) for n in above)}): Blender applies a "
+                             f"modifier to the base mesh, and the surface is built from what "
+                             f"they deliver")
     # only the applied modifier's errors matter: a further GERBS modifier (copied in
     # the modifier panel) is ignored by the sync and must not block this one
     outcome = handlers.sync_now(obj)
@@ -155,9 +179,9 @@ def remove(obj, mod=None) -> None:
     """Remove the GERBS modifier and its hidden result object; the base mesh is as
     before. A no-op if there is none."""
     _mesh_object(obj)
-    mod = mod or get_modifier(obj)
-    if mod is None:
+    if mod is None and get_modifier(obj) is None:
         return
+    mod = _modifier(obj, mod)
     _local(obj, "remove the modifier of")
     obj.modifiers.remove(mod)
     obj.update_tag()
