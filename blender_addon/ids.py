@@ -33,7 +33,7 @@ SCENE_PROP = "gerbs"  # bpy.types.Scene.gerbs -> GERBS_PG_scene
 NODE_GROUP_NAME = "GERBS Blending Surface"
 MODIFIER_NAME = "GERBS Blending Surface"
 GROUP_TAG = "gerbs_group_version"  # custom property on the node group
-GROUP_VERSION = 10  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
+GROUP_VERSION = 11  # 2: checks the result against its input; 3: no Degree / Face Shape, a Rest
 # Shape; 4: Merge by Distance, Merge Distance and the Warning line; 5: Render Resolution
 # and a render result, the built settings and carried attributes recorded on each result
 # (no "Built ..." inputs), the input passed on while stale; 6: the channel says which
@@ -43,7 +43,8 @@ GROUP_VERSION = 10  # 2: checks the result against its input; 3: no Degree / Fac
 # normals are checked against the record and passed on in the channel (CHANNEL_NORMAL); 9:
 # a Render Error: a final render whose build failed shows the input, not the viewport surface;
 # 10: carried float layers compare within LAYER_TOLERANCE (Blender's Bevel modifier writes
-# UVs that differ by an ulp from one evaluation to the next)
+# UVs that differ by an ulp from one evaluation to the next); 11: an input carrying a crease
+# layer (crease_edge, crease_vert) its result's record lacks is stale (SNAP_CREASED)
 PART_TAG = "gerbs_part"  # custom property on each nested node group (node_parts.py): its key
 PART_VERSION = "gerbs_part_version"  # ... and the GROUP_VERSION it was built for
 PART_PREFIX = ".GERBS "  # name prefix of the nested node groups
@@ -76,6 +77,11 @@ N_COUNTS = 5  # SNAP_COUNT + 0..4 (one attribute each: any mesh has a first poin
 SNAPSHOT_ATTRIBUTES = (SNAP_POSITION, SNAP_NORMAL, SNAP_CORNER, SNAP_FACE_SIZE, SNAP_MATERIAL,
                        SNAP_EDGE_A, SNAP_EDGE_B, SNAP_LAYERS) + tuple(
     f"{SNAP_COUNT}{k}" for k in range(N_COUNTS))  # + SNAP_SETTINGS + k (record_names())
+# + 0 / 1: POINT, INT, its first point: 1 where the input carried crease_edge / crease_vert
+# when the record was written (those layers shape the surface: an input that has one the
+# record lacks is stale; the node group reads 0 where a record predates them)
+SNAP_CREASED = ".gerbs_src_creased_"
+CREASE_LAYERS = (("crease_edge", "EDGE"), ("crease_vert", "POINT"))
 SNAP_SERIAL = ".gerbs_src_serial_"  # + k: POINT, INT, its first point: (session salt, write
 #                                    counter)[k] of the record write (snapshot.stamp); optional
 SERIAL_NAMES = tuple(f"{SNAP_SERIAL}{k}" for k in range(2))
@@ -248,4 +254,9 @@ SETTING_KEYS = tuple(s.key for s in SETTINGS)
 def record_names() -> tuple:
     """Every fixed attribute of a result's record (the settings' included)."""
     return SNAPSHOT_ATTRIBUTES + tuple(f"{SNAP_SETTINGS}{k}" for k in range(len(RECORD_SETTINGS)))
+
+
+def optional_record_names() -> tuple:
+    """Attributes of a record that older records lack (read as 0 where missing)."""
+    return tuple(f"{SNAP_CREASED}{k}" for k in range(len(CREASE_LAYERS)))
 DEFAULTS = {s.key: s.default * s.scale if s.scale != 1.0 else s.default for s in SETTINGS}

@@ -41,7 +41,9 @@ def fresh(t, base, result, names, current: dict, resolution):
     values = {spec.name: resolution if spec.key == "resolution" else current[spec.key]
               for spec in ids.RECORD_SETTINGS}
     geometry = t.group(_geometry_part(), {"Base": base, "Result": result})
-    layers = t.group(_layers_part(), {"Base": base, "Result": result, "Names": names})["Fresh"]
+    layers = t.boolean("AND", t.group(_layers_part(), {"Base": base, "Result": result,
+                                                       "Names": names})["Fresh"],
+                       t.group(_creases_part(), {"Base": base, "Result": result})["Fresh"])
     normals = t.group(_normals_part(), {"Base": base, "Result": result,
                                         "Use": current["use_normals"]})["Fresh"]
     return (t.boolean("AND", t.group(_settings_part(), {"Result": result, **values})["Fresh"],
@@ -83,6 +85,23 @@ def _layers_part():
         "Layers Fresh", [("Base", _GEO), ("Result", _GEO), ("Names", _STR)], [("Fresh", _BOOL)],
         lambda t, gin, gout: t.link(layers_fresh(t, gin["Base"], gin["Result"], gin["Names"]),
                                     gout["Fresh"]))
+
+
+def _creases_part():
+    """No crease layer the record lacks: creases shape the surface, and a layer added
+    after the build is not among the recorded ones the layer check compares (found by an
+    adversarial test: crease_edge added with Live Update off, or in a file opened without
+    the add-on, left the uncreased surface shown, 0.43 off a fresh build)."""
+    def build(t, gin, gout):
+        checks = []
+        for k, (name, domain) in enumerate(ids.CREASE_LAYERS):
+            recorded = t.compare("INT", "EQUAL", t.sample(gin["Result"], f"{ids.SNAP_CREASED}{k}",
+                                                          "INT", "POINT", 0), 1)
+            new = t.boolean("AND", t.named(name, "FLOAT")[1], t.boolean("NOT", recorded))
+            checks.append(t.none_differ(gin["Base"], domain, new))
+        t.link(t.boolean("AND", *checks), gout["Fresh"])
+    return node_parts.ensure("Creases Fresh", [("Base", _GEO), ("Result", _GEO)],
+                             [("Fresh", _BOOL)], build)
 
 
 def _layer_equal_part(kind, domain):
@@ -299,7 +318,8 @@ def strip_record(t, geometry):
         t.link(geometry, remove.inputs["Geometry"])
         return remove.outputs[0]
     t.nodes.remove(remove)
-    for name in ids.record_names() + ids.SERIAL_NAMES + (ids.SNAP_REST,):
+    for name in (ids.record_names() + ids.optional_record_names() + ids.SERIAL_NAMES
+                 + (ids.SNAP_REST,)):
         remove = t.node("GeometryNodeRemoveAttribute")
         remove.inputs["Name"].default_value = name
         t.link(geometry, remove.inputs["Geometry"])

@@ -133,6 +133,9 @@ def write_snapshot(mesh, inp: MeshInput, record) -> str:
     counts = (len(inp.positions), len(inp.offsets) - 1, len(inp.corners),
               len(carried.edge_verts), len(table))
     _put_scalars(mesh, ids.SNAP_COUNT, "INT", counts, n["POINT"])
+    names = {layer.name for layer in carried.layers}
+    _put_scalars(mesh, ids.SNAP_CREASED, "INT",
+                 [int(name in names) for name, _ in ids.CREASE_LAYERS], n["POINT"])
     put(mesh, ids.SNAP_CORNER, "INT", "CORNER", inp.corners, n["CORNER"])
     put(mesh, ids.SNAP_FACE_SIZE, "INT", "FACE", np.diff(inp.offsets), n["FACE"])
     put(mesh, ids.SNAP_MATERIAL, "INT", "FACE", inp.materials, n["FACE"])

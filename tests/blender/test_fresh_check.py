@@ -179,3 +179,38 @@ def test_a_bevelled_cylinder_shows_its_surface_at_every_evaluation(blender):
     for _ in range(6):
         obj.update_tag()
         assert len(evaluated(obj)) == n
+
+
+@pytest.mark.parametrize("name, domain", [("crease_edge", "EDGE"), ("crease_vert", "POINT")])
+def test_a_crease_layer_added_after_the_build_makes_the_result_stale(blender, name, domain):
+    """Creases shape the surface, but a layer added after the build is not among those the
+    record carries (found by an adversarial test: crease_edge added with Live Update off
+    left the uncreased surface shown, 0.43 off a fresh build, and so applied and exported).
+    Since group v11 the record says which crease layers it had: the input with a new one
+    shows the base mesh with the out-of-date warning; with Live Update back on it rebuilds
+    (the creased surface). Control: a layer that was recorded and did not change keeps
+    the surface shown."""
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    mesh = obj.data
+    api.add_surface(obj, resolution=2)
+    shown = evaluated(obj)
+    assert len(shown) > len(mesh.vertices)
+    bpy.context.scene.gerbs.live_update = False
+    attr = mesh.attributes.new(name, "FLOAT", domain)
+    n = len(mesh.edges) if domain == "EDGE" else len(mesh.vertices)
+    attr.data.foreach_set("value", np.ones(n, np.float32))
+    mesh.update()
+    X = positions(mesh)
+    assert np.array_equal(evaluated(obj), X)
+    assert "out of date" in warnings(obj)[0][1]
+    bpy.context.scene.gerbs.live_update = True
+    api.update(obj)
+    creased = evaluated(obj)
+    assert len(creased) > len(X) and api.status(obj)["error"] == ""
+    assert np.abs(creased[:len(X)] - X).max() <= 1e-6
+    # recorded now: the same input keeps the creased surface, also with Live Update off
+    bpy.context.scene.gerbs.live_update = False
+    obj.update_tag()
+    assert np.array_equal(evaluated(obj), creased)
