@@ -42,7 +42,39 @@ def is_gerbs_group(group) -> bool:
 
 
 def is_current_group(group) -> bool:
-    return is_gerbs_group(group) and group.get(ids.GROUP_TAG) == ids.GROUP_VERSION
+    """The add-on's group of this version, whole: every Group node in it (and in the parts
+    it uses) still has its node tree. A user who deletes the hidden ".GERBS" parts (Blender
+    File view, or a script) leaves their Group nodes empty and the group would output
+    nothing (found by an adversarial test: the object evaluated to 0 vertices, exports
+    wrote none, every new surface failed); such a group counts as an old one, so the sync
+    moves its modifiers to a rebuilt group (:func:`upgrade_on_sync`)."""
+    if not (is_gerbs_group(group) and group.get(ids.GROUP_TAG) == ids.GROUP_VERSION):
+        return False
+    # walking the nodes costs ~0.5 ms: done again only when the file's node groups change
+    # (a deletion changes their count)
+    key, count = (group.as_pointer(), group.name), len(bpy.data.node_groups)
+    known = _WHOLE.get(key)
+    if known is None or known[0] != count:
+        known = _WHOLE[key] = (count, _whole(group))
+    return known[1]
+
+
+_WHOLE: dict = {}  # (group pointer, name) -> (node group count when checked, whole)
+
+
+def _whole(group, seen=None) -> bool:
+    seen = set() if seen is None else seen
+    for node in group.nodes:
+        if node.bl_idname != "GeometryNodeGroup":
+            continue
+        tree = node.node_tree
+        if tree is None:
+            return False
+        if tree.name not in seen:
+            seen.add(tree.name)
+            if not _whole(tree, seen):
+                return False
+    return True
 
 
 def ensure_group():

@@ -225,6 +225,11 @@ def sync_now(obj, *, force: bool = False, progress=None):
         done = _outcomes.get(key)
     finally:
         _outcomes = None
+    if done is not None and any(r.retry for r in done):
+        # the handler moved it to the current node group: evaluate that, then sync again
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        depsgraph.update()
+        done = None
     if done is not None and not force:  # the handler just synced it
         return done
     if _busy:

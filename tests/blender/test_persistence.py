@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from .helpers import (evaluated, evaluated_faces, export_and_reimport, make_object,
-                      positions, topology)
+from .helpers import (evaluated, evaluated_faces, export_and_reimport, fresh_surface,
+                      make_object, positions, topology)
 
 pytestmark = pytest.mark.blender
 
@@ -370,3 +370,30 @@ def test_a_linked_object_of_an_older_group_reports_why_it_cannot_update(blender,
     assert [r.status for r in out] == ["error"]
     assert "older version" in out[0].message and "make the object local" in out[0].message
     assert "older version" in (handlers.status_message or "")
+
+
+def test_deleted_hidden_parts_are_rebuilt_and_the_surface_comes_back(blender):
+    """Deleting the hidden ".GERBS" node groups (Blender File view, or a script) left the
+    group's Group nodes empty: the object evaluated to 0 vertices, an OBJ export wrote
+    none, status said nothing, and every later add_surface failed with an internal error
+    (found by an adversarial test). Such a group is no longer current: the next sync moves
+    the modifier to a rebuilt group, and the surface is that of the current mesh."""
+    from blender_addon import api, ids
+    from blender_addon import geometry_nodes as gn
+
+    obj = make_object("icosphere")
+    api.add_surface(obj, resolution=2)
+    for group in [g for g in bpy.data.node_groups if g.name.startswith(ids.PART_PREFIX)]:
+        bpy.data.node_groups.remove(group)
+    assert not gn.is_current_group(api.get_modifier(obj).node_group)
+    obj.data.vertices[0].co.z += 0.25
+    obj.data.update()
+    api.update(obj)
+    X = positions(obj.data)
+    offsets, corners = topology(obj.data)
+    P = evaluated(obj)
+    assert api.status(obj)["error"] == "" and gn.is_current_group(api.get_modifier(obj).node_group)
+    assert len(P) > len(X) and np.abs(P - fresh_surface(X, offsets, corners, 2)).max() <= 1e-5
+    other = make_object("icosphere")
+    api.add_surface(other, resolution=2)
+    assert len(evaluated(other)) == len(P)
