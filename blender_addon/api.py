@@ -153,6 +153,10 @@ def apply(obj, mod=None) -> None:
     if obj.data.users > 1:
         raise OperationError(f"{obj.name!r}: its mesh {obj.data.name!r} is used by "
                              f"{obj.data.users} objects; make it single-user first")
+    # only the applied modifier's errors matter: a further GERBS modifier (copied in
+    # the modifier panel) is ignored by the sync and must not block this one
+    outcome = handlers.sync_now(obj)
+    _raise_if_error(outcome[gn.gerbs_modifiers(obj).index(mod):][:1], True)
     above = [m.name for m in obj.modifiers[:list(obj.modifiers).index(mod)] if m.show_viewport]
     if above:
         # Blender applies a modifier to the base mesh, without those above it: the node
@@ -162,10 +166,6 @@ def apply(obj, mod=None) -> None:
                              f"({', '.join(repr(n) for n in above)}): Blender applies a "
                              f"modifier to the base mesh, and the surface is built from what "
                              f"they deliver")
-    # only the applied modifier's errors matter: a further GERBS modifier (copied in
-    # the modifier panel) is ignored by the sync and must not block this one
-    outcome = handlers.sync_now(obj)
-    _raise_if_error(outcome[gn.gerbs_modifiers(obj).index(mod):][:1], True)
     bpy.context.view_layer.update()  # the result written by the sync is what gets applied
     try:
         with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj]):
