@@ -131,6 +131,15 @@ class Stencil(Immutable):
             raise InvalidParameterError("delta", f"must have one row per moved vertex: "
                                         f"{len(moved)} rows, got shape {delta.shape}")
         check_finite(delta, "delta")
+        P = self.base.shape[0]
+        if not isinstance(points, np.ndarray) or points.dtype != np.float64 \
+                or points.shape[:1] != (P,) or points.ndim != delta.ndim:
+            raise InvalidParameterError("points", f"must be the float64 output points "
+                                        f"({P}, k) being updated in place, got "
+                                        f"{type(points).__name__} {np.shape(points)}")
+        if points.shape[1:] != delta.shape[1:]:
+            raise InvalidParameterError("delta", f"must have the points' {points.shape[1:]} "
+                                        f"columns per moved vertex, got shape {delta.shape}")
         hit, dW = self.moved_columns(moved)
         if len(hit):
             points[hit] += dW @ delta

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..inputs import check_index, real_array
 from .agreement import FairnessRule
 from .charts import BOUNDARY_RULES
 from .repair import _warning as mesh_warning
@@ -86,18 +87,6 @@ def check_settings(boundary, kappa, shrink, fairness) -> FairnessRule:
 OUTSIDE_TOL = 1e-9
 
 
-def _real_array(name, a) -> np.ndarray:
-    try:
-        x = np.asarray(a)
-        if x.dtype.kind not in "biuf":
-            raise TypeError
-        return x.astype(np.float64)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(name, f"must be real numbers, got {type(a).__name__}"
-                                    + (f" of dtype {np.asarray(a).dtype}"
-                                       if isinstance(a, np.ndarray) else "")) from None
-
-
 def face_points(face_index, local_coords, n_faces: int, polygons=None):
     """(faces (N,), points (N, 2), shape) of face indices broadcast against layout
     coordinates (..., 2): finite coordinates, integer faces in [0, n_faces); with
@@ -105,7 +94,7 @@ def face_points(face_index, local_coords, n_faces: int, polygons=None):
     (or within ``OUTSIDE_TOL`` of) its face's layout polygon, which is convex and
     counter-clockwise (:mod:`gerbs_core.mesh.layout`): outside it the surface is not
     defined (the cover's functions extrapolate, or leave the point uncovered)."""
-    x = _real_array("local_coords", local_coords)
+    x = real_array("local_coords", local_coords, copy=False)
     if x.shape[-1:] != (2,):
         raise InvalidParameterError("local_coords", f"must have shape (..., 2), got {x.shape}")
     if not np.all(np.isfinite(x)):
@@ -156,16 +145,13 @@ def _inside(f, x, corners, offsets):
 
 
 def vertex_index(v, n: int) -> int:
-    """`v` as a vertex index in [0, n) (an int, not a bool; no negative wrap-around)."""
-    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) \
-            or not 0 <= int(v) < n:
-        raise InvalidParameterError("v", f"must be a vertex index in [0, {n}), got {v!r}")
-    return int(v)
+    """`v` as a vertex index in [0, n) (:func:`gerbs_core.inputs.check_index`)."""
+    return check_index("v", v, n)
 
 
 def chart_points(y) -> np.ndarray:
     """(N, 2) float64 chart points from `y` (2,) or (N, 2), finite."""
-    y = np.atleast_2d(_real_array("y", y))
+    y = np.atleast_2d(real_array("y", y, copy=False))
     if y.ndim != 2 or y.shape[1] != 2:
         raise InvalidParameterError("y", f"must be chart points of shape (N, 2) or (2,), got "
                                     f"shape {np.shape(y)}")

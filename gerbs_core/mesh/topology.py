@@ -53,6 +53,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidMeshError
+from ..inputs import check_index
 from .arrays import read_only as _ro
 from .topology_build import check_faces, check_indices, face_cycles, mesh_edges, vertex_stars
 
@@ -219,10 +220,12 @@ class MeshTopology:
 
     def one_ring(self, v: int) -> np.ndarray:
         """Neighbours of v, counter-clockwise (see :attr:`ring_vertices`)."""
+        v = check_index("v", v, self.n_vertices)
         return self.ring_vertices[self.ring_offsets[v]:self.ring_offsets[v + 1]]
 
     def face(self, f: int) -> np.ndarray:
         """Vertex indices of face f in order."""
+        f = check_index("f", f, self.n_faces)
         return self.face_vertices[self.face_offsets[f]:self.face_offsets[f + 1]]
 
     def faces_as_list(self) -> list[tuple[int, ...]]:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InvalidMeshError
+from ..errors import InvalidMeshError, InvalidParameterError
 from .topology import MeshTopology
 from .topology_build import edge_error
 
@@ -36,6 +36,10 @@ def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12) -> 
     face; the vector area sum_k x_k x x_{k+1} / 2 vanishes exactly for collinear
     corners and for self-cancelling polygons).
     """
+    if not isinstance(topology, MeshTopology):
+        raise InvalidParameterError("topology", f"must be a MeshTopology (e.g. "
+                                    f"MeshTopology(faces, n_vertices)), got "
+                                    f"{type(topology).__name__}")
     x = np.asarray(vertices)
     if x.ndim != 2 or x.shape[1] not in (2, 3) or x.shape[0] != topology.n_vertices \
             or x.dtype.kind not in "fiu":

@@ -19,6 +19,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidPointSetError
+from ..inputs import radii
 from .covers import padded_ball_query
 from .radii import auto_R, nearest_distances, validate_radii
 
@@ -54,13 +55,13 @@ class BallCover:
                 raise InvalidPointSetError("points: cover='balls' needs R when N < 2")
             self.R, self.certified = auto_R(points, metric, tree=tree)
         else:
-            self.R = np.broadcast_to(np.asarray(R, float), (N,)).copy()
+            self.R = radii("R", R, N)
             self.certified = False
         if rho is None:
             self.rho = np.minimum(0.5 * self.nearest, self.R)
             self.disjoint_phi = True
         else:
-            self.rho = np.broadcast_to(np.asarray(rho, float), (N,)).copy()
+            self.rho = radii("rho", rho, N)
             self.disjoint_phi = bool(np.all(self.rho <= 0.5 * self.nearest))
         validate_radii(self.rho, self.R, self.nearest)
         self._build_search()

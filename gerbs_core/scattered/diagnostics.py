@@ -14,6 +14,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import Delaunay
 
+from ..errors import InvalidParameterError
+from ..inputs import real_array
+
 from .covers import in_convex_polygon
 
 __all__ = ["sample_domain", "cover_report"]
@@ -58,7 +61,12 @@ def cover_report(interp, samples=None, resolution=6):
       max_overlap, mean_overlap  number of elements with psi_i(x) > 0
       n_samples, outside (samples where no psi is positive)
     """
-    x = sample_domain(interp, resolution) if samples is None else np.asarray(samples, float)
+    if isinstance(resolution, (bool, np.bool_)) or not isinstance(resolution, (int, np.integer)) \
+            or resolution < 1:
+        raise InvalidParameterError("resolution", f"must be an integer >= 1, got {resolution!r}")
+    x = sample_domain(interp, resolution) if samples is None else real_array("samples", samples)
+    if x.ndim != 2 or x.shape[1] != interp.n:
+        raise InvalidParameterError("samples", f"must have shape (M, {interp.n}), got {x.shape}")
     maxpsi, sums, counts = [], [], []
     for s in range(0, len(x), interp.chunk_size):
         xc = x[s:s + interp.chunk_size]

@@ -107,7 +107,11 @@ class GERBSInterpolator(Immutable):
         self.points, self.n, self._tree = pts, n, tree
         self._points_t = np.ascontiguousarray(pts.T)     # coordinate-major, for gathers
         self.kernel = as_kernel(kernel)
-        self.fill_value = fill_value
+        if isinstance(fill_value, (bool, np.bool_)) or not isinstance(
+                fill_value, (int, float, np.integer, np.floating)):
+            raise InvalidParameterError("fill_value", f"must be a real number (NaN by "
+                                        f"default), got {fill_value!r}")
+        self.fill_value = float(fill_value)
         if isinstance(chunk_size, (bool, np.bool_)) or not isinstance(chunk_size, (int, np.integer)) \
                 or not chunk_size >= 1:
             raise InvalidParameterError("chunk_size", f"must be an integer >= 1, got {chunk_size!r}")
@@ -172,6 +176,13 @@ class GERBSInterpolator(Immutable):
         if metric is not None and not isinstance(as_metric(metric, n), Euclidean):
             raise InvalidParameterError(
                 "metric", "star covers use the Euclidean gauge; metric applies to cover='balls'")
+        for name, value in (("rho", rho), ("R", R)):
+            if value is not None:       # was ignored silently
+                raise InvalidParameterError(
+                    name, f"ball radii apply to cover='balls', not {self.cover_kind!r}")
+        if domain is not None and self.cover_kind != "voronoi":
+            raise InvalidParameterError("domain", f"applies to cover='voronoi' (the clipping "
+                                        f"polygon), not {self.cover_kind!r}")
         if self.cover_kind != "delaunay" and n != 2:
             raise InvalidParameterError("cover", f"{self.cover_kind} covers are planar: points must have n = 2")
         if n == 1:
@@ -306,6 +317,9 @@ class GERBSInterpolator(Immutable):
     def memory_estimate(self, M, nu=0):
         """Bytes a call with M query points needs at peak (an upper bound): the output,
         the query ordering and one chunk of working arrays."""
+        if isinstance(M, (bool, np.bool_)) or not isinstance(M, (int, np.integer)) or M < 0:
+            raise InvalidParameterError("M", f"must be a number of query points >= 0, got {M!r}")
+        nu = check_order(nu, 2, owner="the interpolator")
         return _budget.call_estimate(int(M), self.n, self._V, nu, self._work)
 
     def __call__(self, x, nu=0):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidParameterError, InvalidPointSetError
+from ..inputs import real_array
 
 __all__ = ["hermite_data"]
 
@@ -18,7 +19,7 @@ def hermite_data(values, gradients, hessians, N, n):
     InvalidParameterError for wrong shapes and InvalidPointSetError naming the points
     with non-finite data.
     """
-    vals = np.array(values, dtype=float, copy=True)
+    vals = real_array("values", values)
     if vals.ndim == 0 or vals.shape[0] != N:
         raise InvalidParameterError("values", f"expected shape (N={N}, ...), got {np.shape(values)}")
     vshape = vals.shape[1:]
@@ -32,7 +33,7 @@ def hermite_data(values, gradients, hessians, N, n):
     for name, arr, k in (("gradients", gradients, 1), ("hessians", hessians, 2)):
         if arr is None:
             break
-        a = np.array(arr, dtype=float, copy=True)
+        a = real_array(name, arr)
         want = (N,) + vshape + (n,) * k
         if a.shape != want:
             raise InvalidParameterError(name, f"expected shape {want}, got {a.shape}")

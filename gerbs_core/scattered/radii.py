@@ -33,6 +33,7 @@ from scipy.spatial import cKDTree, Delaunay
 from scipy.spatial import QhullError
 
 from ..errors import InvalidParameterError, InvalidPointSetError
+from ..inputs import real_array
 from .cover_check import certify_cover
 from .metrics import QuasiNorm
 
@@ -44,7 +45,7 @@ def check_points(points, name="points", min_points=1, return_tree=False):
     """Return a float64 copy (N, n) of ``points``; raise on bad shapes, NaN/inf,
     duplicates (InvalidPointSetError naming the indices) or too few points.
     ``return_tree``: also return a cKDTree of the points (None for one point)."""
-    p = np.array(points, dtype=float, copy=True)
+    p = real_array(name, points)
     if p.ndim == 1:
         p = p[:, None]
     if p.ndim != 2 or p.shape[1] < 1:

@@ -32,6 +32,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..inputs import check_index, real_array
 from ..kernels import Kernel, as_kernel
 from ..kernels.base import as_float_array, check_order
 from .evaluate import blend_jet, falling_jet, knot_interval, rising_jet
@@ -40,8 +41,7 @@ __all__ = ["GERBSBasis", "GERBSCurve"]
 
 
 def _check_knots(knots) -> np.ndarray:
-    k = np.array(knots, dtype=np.float64, copy=True) if not isinstance(knots, np.ndarray) \
-        else knots.astype(np.float64, copy=True)
+    k = real_array("knots", knots)
     if k.ndim != 1:
         raise InvalidParameterError("knots", f"must be a 1-d array, got shape {k.shape}")
     if k.size < 3:
@@ -129,6 +129,7 @@ class GERBSBasis:
 
     def support(self, j: int) -> tuple:
         """[t_{j-1}, t_{j+1}] for column j (0-based: G_{j+1}), as a tuple."""
+        j = check_index("j", j, len(self._knots) - 2)
         return float(self._knots[j]), float(self._knots[j + 2])
 
     def rising(self, t, nmax: int = 0):

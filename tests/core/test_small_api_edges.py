@@ -71,3 +71,72 @@ def test_exact_surface_inputs_are_checked():
 def test_mesh_quality_helpers_check_their_input(points, triangles, text):
     with pytest.raises(ValueError, match=text):
         triangle_normals(points, triangles)
+
+
+def _reviewed_calls():
+    """Calls a review of the core as a scipy user found answered by raw numpy errors,
+    silently ignored or answered wrongly (each: call, the argument named, message part)."""
+    from gerbs_core import GERBSInterpolator
+    from gerbs_core.datasets import primitives as prim
+    from gerbs_core.mesh.surface import BlendingSurface
+    from gerbs_core.mesh.topology import MeshTopology
+    from gerbs_core.mesh.validation import validate_geometry
+    from gerbs_core.scattered.diagnostics import cover_report
+    from gerbs_core.splines.curves import GERBSBasis
+
+    rng = np.random.default_rng(0)
+    P = rng.random((50, 2))
+    v = np.sin(P[:, 0])
+    V, F = prim.cube()
+    st = BlendingSurface(V, F).stencil(2)
+    pts = st.apply(V)
+    return [
+        (lambda: GERBSInterpolator(P, v, cover="balls", R=-1.0), "R", "finite and > 0"),
+        (lambda: GERBSInterpolator(P, v, cover="balls", R=np.ones(3)), "R", r"shape \(50,\)"),
+        (lambda: GERBSInterpolator(P, v, cover="balls", R=np.nan), "R", "finite"),
+        (lambda: GERBSInterpolator(P, v, cover="balls", rho=np.zeros(50)), "rho", "> 0"),
+        (lambda: GERBSInterpolator(P, v, rho=0.1), "rho", "cover='balls'"),
+        (lambda: GERBSInterpolator(P, v, R=0.1), "R", "cover='balls'"),
+        (lambda: GERBSInterpolator(P, v, domain=[[0, 0], [1, 0], [1, 1]]), "domain", "voronoi"),
+        (lambda: GERBSInterpolator(P, v, fill_value="a"), "fill_value", "real number"),
+        (lambda: GERBSInterpolator(P.astype(str), v), "points", "real numbers"),
+        (lambda: GERBSInterpolator(P, v.astype(complex)), "values", "real numbers"),
+        (lambda: GERBSInterpolator(P, v).memory_estimate(-1), "M", ">= 0"),
+        (lambda: GERBSInterpolator(P, v).memory_estimate(10, nu=5), "nu", "max_order = 2"),
+        (lambda: cover_report(GERBSInterpolator(P, v), resolution=0), "resolution", ">= 1"),
+        (lambda: cover_report(GERBSInterpolator(P, v), samples=np.zeros((4, 3))), "samples",
+         r"\(M, 2\)"),
+        (lambda: GERBSBasis(["a", "b", "c"]), "knots", "real numbers"),
+        (lambda: GERBSBasis([0.0, 1.0, 2.0, 3.0]).support(-1), "j", r"\[0, 2\), got -1"),
+        (lambda: GERBSBasis([0.0, 1.0, 2.0, 3.0]).support(99), "j", "got 99"),
+        (lambda: MeshTopology(F, 8).face(-1), "f", r"\[0, 6\), got -1"),
+        (lambda: MeshTopology(F, 8).one_ring(10), "v", "got 10"),
+        (lambda: validate_geometry(V, [[0, 1, 2]]), "topology", "MeshTopology"),
+        (lambda: st.apply_moved(pts, np.array([0]), np.zeros((1, 2))), "delta", r"\(3,\)"),
+        (lambda: st.apply_moved(pts[:5], np.array([0]), np.zeros((1, 3))), "points", "float64"),
+        (lambda: st.apply_moved(pts.tolist(), np.array([0]), np.zeros((1, 3))), "points", "list"),
+    ]
+
+
+@pytest.mark.parametrize("k", range(23))
+def test_reviewed_arguments_are_refused_by_name(k):
+    from gerbs_core.errors import InvalidParameterError
+
+    call, name, text = _reviewed_calls()[k]
+    with pytest.raises(InvalidParameterError, match=text) as exc:
+        call()
+    assert exc.value.name == name
+
+
+def test_the_reviewed_checks_keep_what_is_valid():
+    """Controls: the same objects with valid arguments answer as before."""
+    from gerbs_core import GERBSInterpolator
+    from gerbs_core.splines.curves import GERBSBasis
+
+    rng = np.random.default_rng(0)
+    P = rng.random((50, 2))
+    interp = GERBSInterpolator(P, np.sin(P[:, 0]), fill_value=0)
+    assert interp(np.array([[5.0, 5.0]]))[0] == 0.0 and interp.memory_estimate(10) > 0
+    balls = GERBSInterpolator(P, np.sin(P[:, 0]), cover="balls", R=0.5)
+    assert np.abs(balls(P) - np.sin(P[:, 0])).max() <= 1e-12
+    assert GERBSBasis([0.0, 1.0, 2.0, 3.0]).support(np.int64(1)) == (1.0, 3.0)
