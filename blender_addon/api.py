@@ -176,8 +176,9 @@ def apply(obj, mod=None) -> None:
 
 
 def remove(obj, mod=None) -> None:
-    """Remove the GERBS modifier and its hidden result object; the base mesh is as
-    before. A no-op if there is none."""
+    """Remove the GERBS modifier (`mod`, one of the object's own, or the first) and its
+    hidden result object; the base mesh is as before. A no-op if the object has none and
+    no `mod` is given; a `mod` that is not its own GERBS modifier: NoModifierError."""
     _mesh_object(obj)
     if mod is None and get_modifier(obj) is None:
         return

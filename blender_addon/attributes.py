@@ -57,6 +57,9 @@ class Carried:
     render_uv: str = ""
     active_color: str = ""
     default_color: str = ""
+    # the crease layers (ids.CREASE_LAYERS names) the mesh has, whatever their type: the
+    # record says which (the node group finds an input with another one stale)
+    creases: tuple = ()
 
     @property
     def groups(self) -> tuple:
@@ -79,7 +82,8 @@ class Carried:
                         for a, b in zip(self.layers, other.layers)))
 
     def flags(self) -> tuple:
-        return (self.active_uv, self.render_uv, self.active_color, self.default_color)
+        return (self.active_uv, self.render_uv, self.active_color, self.default_color,
+                self.creases)
 
 
 def values_equal(a: np.ndarray, b: np.ndarray) -> bool:
@@ -137,12 +141,14 @@ def layer_keys(mesh, group_names) -> tuple:
 
 def flags_of(mesh) -> tuple:
     """``Carried.flags()`` of `mesh`: its active and render UV maps, active and default
-    color attributes."""
+    color attributes, and the crease layers it has (any type: one of a type the surface
+    does not carry is still recorded as there, so the node group's check holds)."""
     uv, render = mesh.uv_layers.active, next((u for u in mesh.uv_layers if u.active_render), None)
     attrs = mesh.attributes
     return (uv.name if uv is not None else "", render.name if render is not None else "",
             getattr(attrs, "active_color_name", "") or "",
-            getattr(attrs, "default_color_name", "") or "")
+            getattr(attrs, "default_color_name", "") or "",
+            tuple(name for name, _ in ids.CREASE_LAYERS if attrs.get(name) is not None))
 
 
 def group_weights(mesh, n_groups: int, channel: dict | None = None) -> np.ndarray:

@@ -51,15 +51,18 @@ def is_current_group(group) -> bool:
     if not (is_gerbs_group(group) and group.get(ids.GROUP_TAG) == ids.GROUP_VERSION):
         return False
     # walking the nodes costs ~0.5 ms: done again only when the file's node groups change
-    # (a deletion changes their count)
-    key, count = (group.as_pointer(), group.name), len(bpy.data.node_groups)
+    # (their session ids: never reused within a session, so a deletion followed by a new
+    # group is seen; a count would not see it)
+    key = group.session_uid
+    groups = tuple(g.session_uid for g in bpy.data.node_groups)
     known = _WHOLE.get(key)
-    if known is None or known[0] != count:
-        known = _WHOLE[key] = (count, _whole(group))
+    if known is None or known[0] != groups:
+        _WHOLE.clear()          # one group checked at a time: nothing stale accumulates
+        known = _WHOLE[key] = (groups, _whole(group))
     return known[1]
 
 
-_WHOLE: dict = {}  # (group pointer, name) -> (node group count when checked, whole)
+_WHOLE: dict = {}  # group session id -> (the file's node group session ids, whole)
 
 
 def _whole(group, seen=None) -> bool:

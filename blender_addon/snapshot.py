@@ -133,9 +133,8 @@ def write_snapshot(mesh, inp: MeshInput, record) -> str:
     counts = (len(inp.positions), len(inp.offsets) - 1, len(inp.corners),
               len(carried.edge_verts), len(table))
     _put_scalars(mesh, ids.SNAP_COUNT, "INT", counts, n["POINT"])
-    names = {layer.name for layer in carried.layers}
     _put_scalars(mesh, ids.SNAP_CREASED, "INT",
-                 [int(name in names) for name, _ in ids.CREASE_LAYERS], n["POINT"])
+                 [int(name in carried.creases) for name, _ in ids.CREASE_LAYERS], n["POINT"])
     put(mesh, ids.SNAP_CORNER, "INT", "CORNER", inp.corners, n["CORNER"])
     put(mesh, ids.SNAP_FACE_SIZE, "INT", "FACE", np.diff(inp.offsets), n["FACE"])
     put(mesh, ids.SNAP_MATERIAL, "INT", "FACE", inp.materials, n["FACE"])
@@ -155,6 +154,15 @@ def write_snapshot(mesh, inp: MeshInput, record) -> str:
     elif mesh.attributes.get(ids.SNAP_NORMAL) is not None:
         mesh.attributes.remove(mesh.attributes[ids.SNAP_NORMAL])
     return stamp(mesh)
+
+
+def _creases(mesh, n) -> tuple:
+    """The crease layers the record's input had (:attr:`Carried.creases`; none where the
+    record predates them)."""
+    attrs = mesh.attributes
+    return tuple(name for k, (name, _) in enumerate(ids.CREASE_LAYERS)
+                 if attrs.get(f"{ids.SNAP_CREASED}{k}") is not None
+                 and _get(attrs[f"{ids.SNAP_CREASED}{k}"].data, "value", n["POINT"], np.int32)[0])
 
 
 def _put_scalars(mesh, prefix: str, data_type: str, values, size: int) -> None:
@@ -238,7 +246,7 @@ def read_snapshot(mesh, names: str) -> MeshInput | None:
     carried = Carried(layers, edge_verts, uv.name if uv is not None else "",
                       render.name if render is not None else "",
                       getattr(attrs, "active_color_name", "") or "",
-                      getattr(attrs, "default_color_name", "") or "")
+                      getattr(attrs, "default_color_name", "") or "", _creases(mesh, n))
     sizes = _get(attrs[ids.SNAP_FACE_SIZE].data, "value", n["FACE"], np.int32)[:F]
     offsets = np.zeros(F + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])

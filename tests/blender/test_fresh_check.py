@@ -214,3 +214,17 @@ def test_a_crease_layer_added_after_the_build_makes_the_result_stale(blender, na
     bpy.context.scene.gerbs.live_update = False
     obj.update_tag()
     assert np.array_equal(evaluated(obj), creased)
+
+
+def test_a_crease_layer_of_a_type_the_surface_does_not_carry_keeps_the_surface(blender):
+    """A review's find on group v11: a crease_edge of a type the surface does not carry
+    (INT32_2D) was not recorded as there, so the node group found every result stale and
+    showed the base mesh for good, with a warning asking to enable the add-on. The record
+    now says which crease layers the input had, whatever their type: the surface shows."""
+    from blender_addon import api
+
+    obj = make_object("icosphere")
+    obj.data.attributes.new("crease_edge", "INT32_2D", "EDGE")
+    api.add_surface(obj, resolution=2)
+    assert len(evaluated(obj)) > len(obj.data.vertices)
+    assert api.status(obj)["error"] == "" and not warnings(obj)
