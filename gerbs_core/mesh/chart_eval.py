@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import InvalidParameterError
+from .surface_inputs import inside_faces
+
 __all__ = ["chart_evaluate"]
 
 
@@ -27,7 +30,15 @@ def chart_evaluate(surface, v: int, y, nu: int = 0, corner=None):
         a = phi / s - ch.theta0[c] + ch.beta[c]
         r = np.hypot(y[:, 0], y[:, 1])
         x = ch.origin[c] + r[:, None] * np.stack([np.cos(a), np.sin(a)], axis=-1)
-    out = surface.evaluate_all(topo.corner_face[c], x, nu)
+    f = topo.corner_face[c]
+    outside = np.flatnonzero(~inside_faces(f, x, surface.layouts.corners, topo.face_offsets))
+    if len(outside):
+        raise InvalidParameterError(
+            "y", f"{len(outside)} chart point(s) of vertex {v} lie outside its star (first "
+            f"indices {outside[:5].tolist()}, e.g. {y[outside[0]].tolist()})"
+            + (f" or outside corner {int(corner)}'s face" if corner is not None else "")
+            + ": the surface is defined on the faces only")
+    out = surface._evaluate_at(f, x, nu, (len(f),))
     if nu == 0:
         return out
     yy = ch.to_chart(c, x, nu, clamp=False)

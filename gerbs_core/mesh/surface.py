@@ -321,9 +321,14 @@ class BlendingSurface(Immutable):
         face layout coordinates (:mod:`gerbs_core.mesh.layout`); exact to round-off."""
         nu = check_order(nu, 2, owner="the surface")
         f, x, shape = self._face_points(face_index, local_coords)
+        return self._evaluate_at(f, x, nu, shape)
+
+    def _evaluate_at(self, f, x, nu, shape):
+        """:meth:`evaluate_all` at checked points: faces f (N,), their points x (N, 2) (the
+        package's own lattices and charts, known to lie in their faces)."""
         out, eps = self._evaluate(f, x, nu)
         self._require_cover(eps)
-        return [o.reshape(shape + o.shape[1:]) for o in out]
+        return [o.reshape(tuple(shape) + o.shape[1:]) for o in out]
 
     def evaluate(self, face_index, local_coords, nu: int = 0):
         """S (nu = 0, (..., 3)) or its nu-th derivative w.r.t. the layout coordinates."""

@@ -36,7 +36,9 @@ def thin_part_samples(surface) -> np.ndarray:
         if (r == 2 or output_counts(surface.topology, r)[0] <= MAX_POINTS) \
                 and surface.memory_estimate(r) <= surface.memory_budget:
             lat = surface.lattice(r)
-            return surface.evaluate(lat.face, lat.map_to_polygon(surface.layouts.corners))
+            # the lattice's own points (in their faces: no check needed)
+            return surface._evaluate_at(lat.face, lat.map_to_polygon(surface.layouts.corners),
+                                        0, (lat.n_points,))[0]
     return np.empty((0, 3))
 
 

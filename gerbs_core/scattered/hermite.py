@@ -301,8 +301,8 @@ class GERBSInterpolator(Immutable):
 
     def _check_x(self, x):
         x = np.asarray(x, dtype=float)
-        if self.n == 1 and (x.ndim == 0 or x.shape[-1] != 1):
-            x = x[..., None]          # in R^1 queries may be (...,), as interp1d's
+        if self.n == 1 and x.ndim <= 1:
+            x = x[..., None]          # in R^1: a scalar, or (M,) points, as interp1d's
         if x.ndim == 0 or x.shape[-1] != self.n:
             raise InvalidParameterError("x", f"last axis must have length n={self.n}, got shape {x.shape}")
         return x

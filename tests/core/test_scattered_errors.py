@@ -174,4 +174,4 @@ def test_one_dimensional_queries_may_omit_the_last_axis():
     assert interp(q).shape == (3,)
     assert np.array_equal(interp(q), interp(q[:, None]))
     assert np.abs(interp(x) - np.cos(3 * x)).max() <= 1e-12
-    assert interp(0.5).shape == ()
+    assert interp(0.5).shape == () and interp(np.array([0.5])).shape == (1,)

@@ -140,6 +140,8 @@ def test_points_on_the_faces_edges_and_corners_are_inside(cube):
     (lambda s: s.local_function(0, [[np.nan, 0.0]]), "y", "finite"),
     (lambda s: s.chart_evaluate(-1, [0.1, 0.1]), "v", "got -1"),
     (lambda s: s.chart_evaluate(0, [0.1, 0.1], corner=99), "corner", "star"),
+    # beyond the star the surface is not defined; the error names y, not an internal face
+    (lambda s: s.chart_evaluate(0, [50.0, 50.0]), "y", "outside its star"),
 ])
 def test_bad_derivative_orders_vertices_and_chart_points_name_the_argument(cube, call, name, text):
     """Found by a review: nu=1.0 crashed with a raw TypeError, local_function(-1) wrapped
