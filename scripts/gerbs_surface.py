@@ -314,18 +314,29 @@ def weld(bpy, obj, distance: float):
     closer than `distance` (Blender's Merge by Distance, ``bmesh.ops.remove_doubles``),
     before creases are measured: an exporter's split seams (glTF splits every vertex where
     normals or UVs differ, so a cube arrives as six separate quads) leave no edge between
-    two faces to measure. Returns the corner normals before the weld (C, 3), which are the
-    file's (after it Blender re-derives custom normals in the welded fans); the weld keeps
-    the faces and their corners in order."""
+    two faces to measure. Returns the file's corner normals (C', 3) at the corners after
+    the weld (Blender re-derives custom normals in the welded fans): they ride along as a
+    corner attribute, so corners of faces the weld removes (made degenerate) take theirs
+    away with them."""
     import bmesh
-    normals = corner_normals(obj.data.evaluated_get(bpy.context.evaluated_depsgraph_get()))
+    import numpy as np
+    mesh = obj.data
+    normals = corner_normals(mesh.evaluated_get(bpy.context.evaluated_depsgraph_get()))
+    carry = mesh.attributes.new(_WELD_NORMALS, "FLOAT_VECTOR", "CORNER")
+    carry.data.foreach_set("vector", normals.astype(np.float32).ravel())
     bm = bmesh.new()
-    bm.from_mesh(obj.data)
+    bm.from_mesh(mesh)
     bmesh.ops.remove_doubles(bm, verts=bm.verts, dist=distance)
-    bm.to_mesh(obj.data)
+    bm.to_mesh(mesh)
     bm.free()
-    obj.data.update()
-    return normals
+    mesh.update()
+    carry = mesh.attributes[_WELD_NORMALS]
+    out = _get(carry.data, "vector", len(mesh.loops), np.float32, 3).astype(np.float64)
+    mesh.attributes.remove(carry)
+    return out
+
+
+_WELD_NORMALS = ".gerbs_cli_file_normals"  # the imported copy's, removed after the weld
 
 
 def split_normal_edges(mesh, normals, degrees: float = 1.0):

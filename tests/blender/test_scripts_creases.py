@@ -103,3 +103,26 @@ def test_gltf_creases_are_measured_after_the_weld(blender, tmp_path):
                "--merge-distance", "0", "--sharp-creases"], cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert "Cylinder: 64 edges creased" in out.stderr
+
+
+def test_split_normals_follow_their_corners_through_a_weld_that_removes_a_face(blender, tmp_path):
+    """A review's find: the weld drops faces it makes degenerate (here a sliver triangle
+    whose corner lies 2e-5 from a cube corner), and the file's corner normals, taken
+    before it, then belonged to other corners: 16 edges creased on a cube. They now ride
+    along the weld as a corner attribute: the cube's 12."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    V = [(-1, -1, -1), (1, -1, -1), (1, 1, -1), (-1, 1, -1), (-1, -1, 1), (1, -1, 1), (1, 1, 1),
+         (-1, 1, 1), (-1 + 2e-5, -1, 1)]
+    F = [(0, 3, 2, 1), (0, 1, 5, 8, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7), (4, 8, 6),
+         (8, 5, 6), (4, 6, 7)]
+    mesh = bpy.data.meshes.new("sliver")
+    mesh.from_pydata(V, [], F)
+    mesh.update()
+    obj = bpy.data.objects.new("sliver", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    obj.select_set(True)
+    bpy.ops.export_scene.gltf(filepath=str(tmp_path / "sliver.glb"), use_selection=True)
+    out = run([SCRIPT, tmp_path / "sliver.glb", "-o", tmp_path / "s.obj", "--resolution", "2",
+               "--merge-distance", "1e-3", "--sharp-creases"], cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "sliver: 12 edges creased" in out.stderr
