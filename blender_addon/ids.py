@@ -131,7 +131,8 @@ DEFORM_ONLY = ("ARMATURE", "CAST", "CORRECTIVE_SMOOTH", "CURVE", "DISPLACE", "HO
                "SIMPLE_DEFORM", "SMOOTH", "SURFACE_DEFORM", "WARP", "WAVE")
 
 STALE_MESSAGE = ("GERBS: the surface is out of date with this mesh or its settings, so the "
-                 "base mesh is shown; enable the GERBS Blending Surface add-on to update it")
+                 "base mesh is shown; it updates while the GERBS Blending Surface add-on is "
+                 "enabled and the scene's Live Update is on (or press Rebuild)")
 
 # enum-like settings: python value -> menu item label (in this order); the kernels are
 # the core's one table of kernel names (gerbs_core.kernels.KERNELS)

@@ -82,6 +82,10 @@ def stack_notes(obj, mod, background: bool, locked: bool, settings: dict) -> lis
     mods = list(obj.modifiers)
     above = mods[:mods.index(mod)]
     notes = []
+    props = getattr(obj.users_scene[0] if obj.users_scene else None, ids.SCENE_PROP, None)
+    if props is not None and not props.live_update:
+        notes.append("Live Update is off (Scene): edits are not followed; an edited mesh "
+                     "shows its base mesh until Rebuild or Live Update is on again.")
     differs = [t for t in (_renders_differently(m) for m in above) if t]
     if differs and not (background or locked):
         notes.append(f"{'; '.join(differs)}: renders show the base mesh unless "

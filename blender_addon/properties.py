@@ -51,12 +51,28 @@ def settings_from(props) -> dict:
     return out
 
 
+def _live_update_changed(self, context) -> None:
+    """Live Update turned on: tag the scene's GERBS objects, so the next depsgraph update
+    syncs the edits made while it was off (only marks work; the handler does it). Found by
+    a test of the interactive workflow: turning it on again left the base mesh shown until
+    the next edit."""
+    if not self.live_update:
+        return
+    from . import geometry_nodes as gn
+    scene = getattr(context, "scene", None)
+    for obj in (scene.objects if scene is not None else ()):
+        if gn.gerbs_modifiers(obj):
+            obj.update_tag()
+
+
 class GERBS_PG_scene(bpy.types.PropertyGroup):
     """Add-on state stored on the scene."""
 
     live_update: BoolProperty(
-        name="Live Update", default=True,
-        description="Recompute GERBS surfaces whenever the base mesh or settings change")
+        name="Live Update", default=True, update=_live_update_changed,
+        description="Recompute GERBS surfaces whenever the base mesh or settings change; "
+                    "off, an edited mesh shows its base mesh until Rebuild or until it is "
+                    "turned on again")
 
 
 CLASSES = (GERBS_PG_scene,)

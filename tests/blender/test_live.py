@@ -323,3 +323,33 @@ def test_follow_is_always_the_surface_of_the_current_mesh(blender):
     bound = BlendingSurface(X2, F, rest_positions=X).tessellate(R)[0]
     assert np.abs(P_follow - fresh).max() <= 1e-5
     assert np.abs(fresh - bound).max() > 1e-3     # the two policies differ on this edit
+
+
+def test_live_update_off_says_so_and_turning_it_on_syncs_the_edits(blender):
+    """Found by a test of the interactive workflow: with Live Update off an edited mesh
+    showed its base mesh with a warning asking to enable the (enabled) add-on, the panel
+    said nothing, and turning Live Update on again left the base mesh until the next edit.
+    Now the panel notes it is off, the warning names Live Update, and turning it on tags
+    the scene's GERBS objects: the next update shows the surface of the edited mesh."""
+    from blender_addon import api, panels
+
+    from .helpers import fresh_surface, warnings
+
+    obj = make_object("grid")
+    api.add_surface(obj, resolution=2)
+    scene = bpy.context.scene
+    scene.gerbs.live_update = False
+    obj.data.vertices[5].co.z += 0.3
+    obj.data.update()
+    X = positions(obj.data)
+    assert np.array_equal(evaluated(obj), X)                       # the base mesh
+    assert "Live Update" in warnings(obj)[0][1]
+    notes = " ".join(" ".join(n) for n in panels.panel_rows(obj, api.get_modifier(obj), 600)["notes"])
+    assert "Live Update is off" in notes
+    scene.gerbs.live_update = True
+    bpy.context.view_layer.update()
+    offsets, corners = topology(obj.data)
+    P = evaluated(obj)
+    assert len(P) > len(X) and np.abs(P - fresh_surface(X, offsets, corners, 2)).max() <= 1e-5
+    notes = " ".join(" ".join(n) for n in panels.panel_rows(obj, api.get_modifier(obj), 600)["notes"])
+    assert "Live Update is off" not in notes
