@@ -265,6 +265,7 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     if problem:
         return _fail(obj, mod, key, blank, problem, progress, render=render)
     retry = False
+    stale = inp is not stack.FRESH  # the node group passed its input on: the base mesh shows
     if inp is stack.FRESH:
         inp = _fresh_input(obj, mod, depsgraph, res, shown, st, render, settings)
         if inp is None and render:
@@ -292,7 +293,8 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     if not render:
         _clear_stale_render_error(obj, mod, settings, crz)
     _copy_materials(obj.data, res.data)
-    outcome = _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0)
+    outcome = _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0,
+                      stale)
     if outcome is None:
         bound = _rest_shape(mod, res, shown, (st, view), inp, settings, force, render)
         outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz, bound, force),
@@ -300,8 +302,12 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     return SyncResult(outcome.status, outcome.message, outcome.rebind, retry) if retry else outcome
 
 
-def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
-    """The cheap outcomes (unchanged, carried layers only, linear positions), or None."""
+def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0, stale=False):
+    """The cheap outcomes (unchanged, carried layers only, linear positions), or None.
+    `stale`: the node group showed the base mesh; an input equal to the state's then means
+    the result's record is not the state's (an undo restored an older one: found by a test
+    of the interactive workflow, undo from Object Mode back into Edit Mode left the base
+    mesh shown, every sync 'unchanged'), and the result is written again (None)."""
     same = (not force and st is not None and st.settings == skey
             and st.result_uid == res.session_uid and st.input is not None)
     if not same:
@@ -309,7 +315,9 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0):
     linear = settings["rest"] == "bound" or dragging(obj)
     settled = linear or st.rest is None or np.array_equal(st.rest, st.positions)
     if st.input.same(inp) and settled:
-        return SyncResult("error", st.error) if st.error else SyncResult("unchanged")
+        if st.error:
+            return SyncResult("error", st.error)
+        return None if stale else SyncResult("unchanged")
     if st.error or st.transfer is None:
         return None
     carried_same = (np.array_equal(st.input.materials, inp.materials)

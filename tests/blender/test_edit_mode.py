@@ -284,3 +284,38 @@ def test_the_first_evaluation_after_a_full_read_edit_shows_the_edited_surface(bl
     recorded = snapshot.read_snapshot(gn.get_result(mod).data, gn.get_names(mod))
     assert names <= {layer.name for layer in recorded.carried.layers}
     bpy.ops.object.mode_set(mode="OBJECT")
+
+
+def test_undo_from_object_mode_back_into_edit_mode_shows_the_surface(blender):
+    """Found by a test of the interactive workflow: undo from Object Mode back into Edit
+    Mode restored the result's older record, the node group showed the base mesh, and
+    every sync said 'unchanged' (the input equalled the state's). A sync that finds the
+    base mesh shown with an unchanged input now writes the result again."""
+    from blender_addon import api
+
+    from .helpers import evaluated, fresh_surface, positions, topology
+
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=3, y_subdivisions=3, size=2.0)
+    obj = bpy.context.active_object
+    name = obj.name
+    api.add_surface(obj, resolution=2)
+    bpy.ops.ed.undo_push(message="added")
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.ed.undo_push(message="edit")
+    bm = bmesh.from_edit_mesh(obj.data)
+    bm.verts.ensure_lookup_table()
+    bm.verts[5].co.z += 0.3
+    bmesh.update_edit_mesh(obj.data)
+    bpy.context.view_layer.update()
+    bpy.ops.ed.undo_push(message="moved")
+    bpy.ops.object.mode_set(mode="OBJECT")
+    bpy.ops.ed.undo_push(message="object")
+    bpy.ops.ed.undo()
+    obj = bpy.data.objects[name]  # undo replaces the Python objects
+    assert obj.mode == "EDIT"
+    bpy.context.view_layer.update()
+    P = evaluated(obj)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    X = positions(obj.data)
+    offsets, corners = topology(obj.data)
+    assert len(P) > len(X) and np.abs(P - fresh_surface(X, offsets, corners, 2)).max() <= 1e-5
