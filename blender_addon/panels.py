@@ -58,7 +58,8 @@ def panel_rows(obj, mod, width_px: float = 300.0, scale: float = 1.0) -> dict:
         if problem is not None and not problems.on_base_mesh(obj, mod):
             text += " It is in the mesh the modifiers above GERBS make; fix it there."
         out["error"] = problems.wrap(text, width_px, scale)
-        out["select"] = problem is not None and problems.on_base_mesh(obj, mod)
+        out["select"] = problem is not None and problems.on_base_mesh(obj, mod) \
+            and any(problems.selection(problem).values())  # "no faces" names nothing
     elif info["render_error"]:  # the viewport is fine; final renders show the input
         out["error"] = problems.wrap(f"Final render: {problems.headline(info['render_error'])} "
                                      f"Renders show the mesh without the surface until it "

@@ -32,6 +32,9 @@ _PLAIN = {
 
 def headline(message: str, problem=None) -> str:
     """One sentence for the panel: what is wrong, in plain words."""
+    if getattr(problem, "problem", None) == "empty" and "degenerate" in message:
+        # faces there are, but none with an area (the repair's own words, not "no faces")
+        return "Every face of the mesh is degenerate: none has three distinct corners and an area."
     if problem is not None and getattr(problem, "problem", None) in _PLAIN:
         count = len(problem.edges) if getattr(problem, "edges", None) else \
             len(problem.indices) or 1

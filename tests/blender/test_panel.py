@@ -158,3 +158,25 @@ def test_a_thin_part_warns_in_the_panel_with_nothing_to_select(blender):
         bpy.context.evaluated_depsgraph_get()).data.vertices])
     assert np.ptp(P[:, 2]) < 1.7 * 0.2
     assert api.status(obj)["warning"] == "" and not mod.node_warnings
+
+
+@pytest.mark.parametrize("faces, headline", [
+    ([(0, 1, 2, 3)], "Every face of the mesh is degenerate"),   # one collinear quad
+    ([], "The mesh has no faces."),
+])
+def test_a_mesh_without_a_face_with_an_area_says_which_and_offers_no_select(blender, faces,
+                                                                            headline):
+    """Found by a test of the interactive workflow: a mesh whose only face is collinear
+    said "The mesh has no faces." and offered Select, which then selected nothing. The
+    headline now tells the two apart, and Select is offered only for an error that names
+    elements."""
+    from blender_addon import api, panels
+    from blender_addon.api import GERBSSyncError
+
+    from .helpers import link_object
+
+    obj = link_object("flat", [(0, 0, 0), (1, 0, 0), (2, 0, 0), (3, 0, 0)], faces)
+    with pytest.raises(GERBSSyncError, match="empty"):
+        api.add_surface(obj, resolution=2)
+    rows = panels.panel_rows(obj, api.get_modifier(obj), 600)
+    assert " ".join(rows["error"]).startswith(headline) and rows["select"] is False
