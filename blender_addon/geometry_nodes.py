@@ -57,7 +57,6 @@ def is_current_group(group) -> bool:
     groups = tuple(g.session_uid for g in bpy.data.node_groups)
     known = _WHOLE.get(key)
     if known is None or known[0] != groups:
-        _WHOLE.clear()          # one group checked at a time: nothing stale accumulates
         known = _WHOLE[key] = (groups, _whole(group))
     return known[1]
 
