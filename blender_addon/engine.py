@@ -260,12 +260,12 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     known_input = (st or view).input if (st or view) is not None else None
     # the channel names the viewport result's record (its stamp says which write)
     record = (view.input, view.stamp) if view is not None else None
-    inp, problem = stack.read_input(obj, mod, depsgraph, settings["use_normals"], known_input,
-                                    record)
+    # stale: the node group passed its input on (read from the channel): the base mesh shows
+    inp, problem, stale = stack.read_input(obj, mod, depsgraph, settings["use_normals"],
+                                           known_input, record)
     if problem:
         return _fail(obj, mod, key, blank, problem, progress, render=render)
     retry = False
-    stale = inp is not stack.FRESH  # the node group passed its input on: the base mesh shows
     if inp is stack.FRESH:
         inp = _fresh_input(obj, mod, depsgraph, res, shown, st, render, settings)
         if inp is None and render:

@@ -51,7 +51,7 @@ def check(obj, mod, depsgraph, use_normals: bool) -> str:
     shows the base mesh. Reads evaluated data only; writes nothing."""
     from . import stack
 
-    inp, problem = stack.read_input(obj, mod, depsgraph, use_normals)
+    inp, problem, _ = stack.read_input(obj, mod, depsgraph, use_normals)
     if problem:
         return problem
     if inp is None or inp is stack.FRESH:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import textwrap
 
+import bpy
+
 from . import finite, ids
 from .errors import PREFIX
 
@@ -85,7 +87,8 @@ def stack_notes(obj, mod, background: bool, locked: bool, settings: dict) -> lis
     mods = list(obj.modifiers)
     above = mods[:mods.index(mod)]
     notes = []
-    props = getattr(obj.users_scene[0] if obj.users_scene else None, ids.SCENE_PROP, None)
+    scene = getattr(bpy.context, "scene", None)  # the panel's scene (the one being shown)
+    props = getattr(scene, ids.SCENE_PROP, None)
     if props is not None and not props.live_update:
         notes.append("Live Update is off (Scene): edits are not followed; an edited mesh "
                      "shows its base mesh until Rebuild or Live Update is on again.")

@@ -59,8 +59,8 @@ def _live_update_changed(self, context) -> None:
     if not self.live_update:
         return
     from . import geometry_nodes as gn
-    scene = getattr(context, "scene", None)
-    for obj in (scene.objects if scene is not None else ()):
+    scene = self.id_data  # the scene whose property changed (a script may set another's)
+    for obj in (scene.objects if isinstance(scene, bpy.types.Scene) else ()):
         if gn.gerbs_modifiers(obj):
             obj.update_tag()
 

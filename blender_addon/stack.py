@@ -159,29 +159,33 @@ def unhonoured_message(obj, stack: Stack) -> str:
 
 
 def read_input(obj, mod, depsgraph, normals: bool, known=None, record=None):
-    """What `mod` receives now: ``(MeshInput with carried, "")``, ``(FRESH, "")`` while it
-    shows a result, ``(None, "")`` when it is not evaluated (or was with other settings),
-    or ``(None, message)``.
+    """What `mod` receives now: ``(MeshInput with carried, "", passed_on)``, ``(FRESH, "",
+    False)`` while it shows a result, ``(None, "", False)`` when it is not evaluated (or was
+    with other settings), or ``(None, message, False)``. `passed_on`: the input was read
+    from the channel, so the node group passed it on and shows the base mesh (the base
+    mesh read directly, below a modifier that is not deform-only or not evaluated, says
+    nothing about what is shown: False).
     `known`: the last input read (its vertex-group layers tell the channel's names);
     `record`: (input, stamp) of the viewport result's last record write, or None: while
     the channel says only positions differ from that record, only they are read (an
     Edit Mode drag reads 12 bytes a vertex instead of the whole mesh)."""
     stack = stack_of(obj, mod, depsgraph.mode == "RENDER")
     if not stack.enabled:
-        return None, ""
+        return None, "", False
     groups = group_names(obj)
     obj_eval = obj.evaluated_get(depsgraph)
     if stack.deform_after and obj_eval.is_evaluated:
         final = obj_eval.to_mesh() if stack.edit else obj_eval.data
         try:
-            return _read_final(final, groups, normals, known, record), ""
+            inp = _read_final(final, groups, normals, known, record)
+            return inp, "", inp is not None and inp is not FRESH
         finally:
             if stack.edit:
                 obj_eval.to_mesh_clear()
     keys = obj.data.shape_keys
     if stack.above or (keys is not None and len(keys.key_blocks) > 1):
-        return None, unhonoured_message(obj, stack)
-    return read_base(obj, depsgraph, normals), ""
+        return None, unhonoured_message(obj, stack), False
+    return read_base(obj, depsgraph, normals), "", False
 
 
 def read_base(obj, depsgraph, normals: bool, carried_only: bool = False):
