@@ -433,8 +433,12 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
             f"(loose or merged ones); raise the resolution"), progress, render=render)
     st.stencil, st.points, st.warnings = built.stencil, P, built.surface.warnings
     st.points32 = P32  # what write_geometry wrote
-    for warning in st.warnings:
-        log.warning("GERBS: %s: %s", obj.name, warning.message)
+    # logged when they change, not at every rebuild (a Follow drag rebuilds at each pause:
+    # a test of the interactive workflow saw the same repair logged at every step)
+    said = prev.warnings if prev is not None and prev.warnings is not None else ()
+    if [w.message for w in st.warnings] != [w.message for w in said]:
+        for warning in st.warnings:
+            log.warning("GERBS: %s: %s", obj.name, warning.message)
     st.record = gn.settings_record(settings, resolution)
     st.stamp = write_carried(res, mod, st.transfer, inp, st.record)
     st.n_points, st.n_faces = len(P), st.transfer.n_faces

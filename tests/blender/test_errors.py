@@ -203,3 +203,21 @@ def test_invalid_mesh_message_says_problem_and_indices_once(case):
         assert "[" not in message, message
     if case == "no faces":
         assert message == "GERBS: invalid mesh (empty): the mesh has no faces"
+
+
+def test_a_repair_is_logged_once_not_at_every_rebuild(blender, caplog):
+    """Found by a test of the interactive workflow: a Follow drag rebuilds at each pause,
+    and the same repair warning was logged at every step. Logged when the warnings change;
+    a different repair is logged again."""
+    import logging
+
+    from blender_addon import api
+
+    obj = link_object("loose", *LOOSE_VERTEX)
+    with caplog.at_level(logging.WARNING, logger="blender_addon"):
+        api.add_surface(obj, resolution=2)
+        for _ in range(3):
+            api.update(obj, force=True)
+    said = [r for r in caplog.records if "unused" in r.getMessage() or "loose" in r.getMessage()]
+    assert len(said) == 1, [r.getMessage() for r in caplog.records]
+    assert "warning" in api.status(obj) and api.status(obj)["warning"]
