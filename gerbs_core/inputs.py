@@ -9,7 +9,7 @@ import numpy as np
 
 from .errors import InvalidParameterError
 
-__all__ = ["real_array", "check_index", "radii"]
+__all__ = ["real_array", "is_integer", "integer", "check_index", "radii"]
 
 
 def real_array(name: str, a, copy: bool = True) -> np.ndarray:
@@ -26,11 +26,22 @@ def real_array(name: str, a, copy: bool = True) -> np.ndarray:
     return x.astype(np.float64, copy=False)
 
 
+def is_integer(value) -> bool:
+    """An int, Python or numpy, and not a bool (a float, even 1.0, is not)."""
+    return isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def integer(name: str, value, lo: int = 0, what: str = "") -> int:
+    """`value` as an int >= lo (:func:`is_integer`); `what` follows the bound in the message,
+    e.g. " (segments per edge)"."""
+    if not is_integer(value) or value < lo:
+        raise InvalidParameterError(name, f"must be an integer >= {lo}{what}, got {value!r}")
+    return int(value)
+
+
 def check_index(name: str, i, n: int) -> int:
-    """`i` as an index in [0, n): an int (Python or numpy, not a bool), no negative
-    wrap-around."""
-    if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) \
-            or not 0 <= int(i) < n:
+    """`i` as an index in [0, n): an int (:func:`is_integer`), no negative wrap-around."""
+    if not is_integer(i) or not 0 <= int(i) < n:
         raise InvalidParameterError(name, f"must be an index in [0, {n}), got {i!r}")
     return int(i)
 

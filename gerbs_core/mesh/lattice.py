@@ -36,6 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
+from ..inputs import integer
 from .arrays import read_only as _ro
 from .lattice_faces import output_edges, polygon_table
 from .lattice_templates import (CORNER, EDGE, INTERIOR, face_counts, template, template_tris,
@@ -46,10 +47,7 @@ __all__ = ["Lattice", "SizeClass", "output_counts"]
 
 
 def _check_resolution(r) -> int:
-    if isinstance(r, (bool, np.bool_)) or not isinstance(r, (int, np.integer)) or r < 1:
-        raise InvalidParameterError("resolution", f"must be an integer >= 1 (segments per "
-                                    f"edge), got {r!r}")
-    return int(r)
+    return integer("resolution", r, 1, " (segments per edge)")
 
 
 def output_counts(topology, resolution: int) -> tuple[int, int]:

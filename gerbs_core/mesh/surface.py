@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
 from ..immutable import Immutable
+from ..inputs import check_index, is_integer
 from ..kernels.base import check_order
 from ..kernels.names import as_kernel
 from .agreement import MMAX, FairnessRule, fair_fits
@@ -45,7 +46,7 @@ from .repair import MeshWarning, repair_mesh
 from .rings import data_rings
 from .stencil import Stencil
 from .surface_inputs import (chart_points, check_settings, face_points, points, positive,
-                             unit_normals, vertex_index)
+                             unit_normals)
 from .thin_parts import thin_part_samples, thin_part_warning
 from .topology import MeshTopology
 from .validation import check_finite
@@ -351,7 +352,7 @@ class BlendingSurface(Immutable):
 
     def local_function(self, v: int, y, nu: int = 0):
         """l_v and its derivatives at chart points y (N, 2): [(N,3), (N,3,2), (N,3,2,2)]."""
-        v = vertex_index(v, len(self.degrees))
+        v = check_index("v", v, len(self.degrees))
         nu = check_order(nu, 2, owner="a local function")
         y = chart_points(y)
         d = int(self.degrees[v])
@@ -372,12 +373,11 @@ class BlendingSurface(Immutable):
         """
         from .chart_eval import chart_evaluate
         topo = self.model.topology
-        v = vertex_index(v, topo.n_vertices)
+        v = check_index("v", v, topo.n_vertices)
         nu = check_order(nu, 2, owner="the surface")
         if corner is not None:
             star = topo.star_corners[topo.star_offsets[v]:topo.star_offsets[v + 1]]
-            if isinstance(corner, (bool, np.bool_)) or not isinstance(corner, (int, np.integer)) \
-                    or int(corner) not in set(star.tolist()):
+            if not is_integer(corner) or int(corner) not in set(star.tolist()):
                 raise InvalidParameterError("corner", f"must be a corner of vertex {v}'s star "
                                             f"{sorted(star.tolist())}, got {corner!r}")
         return chart_evaluate(self, v, chart_points(y), nu, corner)

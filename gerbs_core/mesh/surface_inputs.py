@@ -7,13 +7,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..inputs import check_index, real_array
+from ..inputs import real_array
 from .agreement import FairnessRule
 from .charts import BOUNDARY_RULES
 from .repair import _warning as mesh_warning
 
 __all__ = ["points", "positive", "unit_normals", "check_settings", "face_points", "inside_faces",
-           "vertex_index", "chart_points"]
+           "chart_points"]
 
 
 def points(name, a, V=None) -> np.ndarray:
@@ -146,10 +146,6 @@ def inside_faces(f, x, corners, offsets):
         ok[at] = worst >= -OUTSIDE_TOL * longest
     return ok
 
-
-def vertex_index(v, n: int) -> int:
-    """`v` as a vertex index in [0, n) (:func:`gerbs_core.inputs.check_index`)."""
-    return check_index("v", v, n)
 
 
 def chart_points(y) -> np.ndarray:

@@ -53,7 +53,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidMeshError
-from ..inputs import check_index
+from ..inputs import check_index, is_integer
 from .arrays import read_only as _ro
 from .topology_build import check_faces, check_indices, face_cycles, mesh_edges, vertex_stars
 
@@ -119,8 +119,7 @@ class MeshTopology:
 
     def __init__(self, faces, n_vertices: int | None = None):
         if n_vertices is not None:
-            if isinstance(n_vertices, (bool, np.bool_)) or not isinstance(n_vertices, (int, np.integer)) \
-                    or n_vertices < 0:
+            if not is_integer(n_vertices) or n_vertices < 0:
                 raise InvalidMeshError("bad_shape", f"bad_shape: n_vertices must be an integer "
                                        f">= 0, got {n_vertices!r}", None, "vertex")
         self._build(*_parse_faces(faces, n_vertices), n_vertices)

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.spatial import Delaunay
 
 from ..errors import InvalidParameterError
-from ..inputs import real_array
+from ..inputs import integer, real_array
 
 from .covers import in_convex_polygon
 
@@ -61,9 +61,7 @@ def cover_report(interp, samples=None, resolution=6):
       max_overlap, mean_overlap  number of elements with psi_i(x) > 0
       n_samples, outside (samples where no psi is positive)
     """
-    if isinstance(resolution, (bool, np.bool_)) or not isinstance(resolution, (int, np.integer)) \
-            or resolution < 1:
-        raise InvalidParameterError("resolution", f"must be an integer >= 1, got {resolution!r}")
+    integer("resolution", resolution, 1)
     x = sample_domain(interp, resolution) if samples is None else real_array("samples", samples)
     if x.ndim != 2 or x.shape[1] != interp.n:
         raise InvalidParameterError("samples", f"must have shape (M, {interp.n}), got {x.shape}")

@@ -13,6 +13,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError
 from ..immutable import Immutable
+from ..inputs import integer
 from ..kernels.base import check_order
 from ..kernels.names import as_kernel
 from . import budget as _budget
@@ -112,10 +113,7 @@ class GERBSInterpolator(Immutable):
             raise InvalidParameterError("fill_value", f"must be a real number (NaN by "
                                         f"default), got {fill_value!r}")
         self.fill_value = float(fill_value)
-        if isinstance(chunk_size, (bool, np.bool_)) or not isinstance(chunk_size, (int, np.integer)) \
-                or not chunk_size >= 1:
-            raise InvalidParameterError("chunk_size", f"must be an integer >= 1, got {chunk_size!r}")
-        self.chunk_size = int(chunk_size)
+        self.chunk_size = integer("chunk_size", chunk_size, 1)
         self.memory_budget = float(memory_budget)
         if not self.memory_budget > 0:
             raise InvalidParameterError("memory_budget", f"must be > 0 bytes, got {memory_budget!r}")
@@ -317,10 +315,9 @@ class GERBSInterpolator(Immutable):
     def memory_estimate(self, M, nu=0):
         """Bytes a call with M query points needs at peak (an upper bound): the output,
         the query ordering and one chunk of working arrays."""
-        if isinstance(M, (bool, np.bool_)) or not isinstance(M, (int, np.integer)) or M < 0:
-            raise InvalidParameterError("M", f"must be a number of query points >= 0, got {M!r}")
+        M = integer("M", M, 0, " (query points)")
         nu = check_order(nu, 2, owner="the interpolator")
-        return _budget.call_estimate(int(M), self.n, self._V, nu, self._work)
+        return _budget.call_estimate(M, self.n, self._V, nu, self._work)
 
     def __call__(self, x, nu=0):
         nu = check_order(nu, 2, owner="the interpolator")
