@@ -241,12 +241,8 @@ def read_snapshot(mesh, names: str) -> MeshInput | None:
     layers = tuple(Layer(name, d, t, v[:cut[d]].copy(), g) for name, d, t, v, g in raw)
     edge_verts = np.stack([_get(attrs[k].data, "value", n["EDGE"], np.int32)[:E]
                            for k in (ids.SNAP_EDGE_A, ids.SNAP_EDGE_B)], 1)
-    uv = mesh.uv_layers.active
-    render = next((u for u in mesh.uv_layers if u.active_render), None)
-    carried = Carried(layers, edge_verts, uv.name if uv is not None else "",
-                      render.name if render is not None else "",
-                      getattr(attrs, "active_color_name", "") or "",
-                      getattr(attrs, "default_color_name", "") or "", _creases(mesh, n))
+    # the result's active maps are the input's (carried); its crease layers are the record's
+    carried = Carried(layers, edge_verts, *attributes.flags_of(mesh)[:4], _creases(mesh, n))
     sizes = _get(attrs[ids.SNAP_FACE_SIZE].data, "value", n["FACE"], np.int32)[:F]
     offsets = np.zeros(F + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])

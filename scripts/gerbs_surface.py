@@ -283,14 +283,24 @@ def _get(collection, name, n, dtype, width=1):
     return buf.reshape(-1, width) if width > 1 else buf
 
 
+def _corners(mesh):
+    """(face (C,), edge (C,), loop_start (F,), loop_total (F,)) of the corners of `mesh`:
+    each corner's face and the edge from it to the face's next corner."""
+    import numpy as np
+    F, C = len(mesh.polygons), len(mesh.loops)
+    size = _get(mesh.polygons, "loop_total", F, np.int32)
+    start = _get(mesh.polygons, "loop_start", F, np.int32)
+    edge = _get(mesh.attributes[".corner_edge"].data, "value", C, np.int32)
+    return np.repeat(np.arange(F), size), edge, start, size
+
+
 def edge_angles(mesh):
     """(E,) degrees between the normals of each edge's first two faces (0 for edges of fewer
     faces) of an evaluated mesh."""
     import numpy as np
-    E, F, C = len(mesh.edges), len(mesh.polygons), len(mesh.loops)
+    E, F = len(mesh.edges), len(mesh.polygons)
     normals = _get(mesh.polygons, "normal", F, np.float32, 3).astype(np.float64)
-    face = np.repeat(np.arange(F), _get(mesh.polygons, "loop_total", F, np.int32))
-    edge = _get(mesh.attributes[".corner_edge"].data, "value", C, np.int32)
+    face, edge, _, _ = _corners(mesh)
     order = np.argsort(edge, kind="stable")
     e, f = edge[order], face[order]
     first = np.searchsorted(e, np.arange(E))
@@ -344,13 +354,10 @@ def split_normal_edges(mesh, normals, degrees: float = 1.0):
     `degrees` apart (split normals: the file's hard edges), from the corner normals
     ``normals`` (C, 3) of `mesh` (an evaluated mesh, the corners in its order)."""
     import numpy as np
-    E, F, C = len(mesh.edges), len(mesh.polygons), len(mesh.loops)
-    size = _get(mesh.polygons, "loop_total", F, np.int32)
-    start = _get(mesh.polygons, "loop_start", F, np.int32)
-    face = np.repeat(np.arange(F), size)
+    E, C = len(mesh.edges), len(mesh.loops)
+    face, edge, start, size = _corners(mesh)
     prev = np.arange(C) - 1
     prev[start] = start + size - 1                  # each face's first corner: its last
-    edge = _get(mesh.attributes[".corner_edge"].data, "value", C, np.int32)
     vert = _get(mesh.attributes[".corner_vert"].data, "value", C, np.int32)
     # every corner meets two of its face's edges: (edge, vertex, face, corner) twice
     e = np.concatenate([edge, edge[prev]])
