@@ -19,7 +19,7 @@ import os
 import numpy as np
 
 from . import ids
-from .attributes import Carried, Layer
+from .attributes import Carried, Layer, flags_of
 from .mesh_io import MeshInput, _get
 
 
@@ -242,7 +242,7 @@ def read_snapshot(mesh, names: str) -> MeshInput | None:
     edge_verts = np.stack([_get(attrs[k].data, "value", n["EDGE"], np.int32)[:E]
                            for k in (ids.SNAP_EDGE_A, ids.SNAP_EDGE_B)], 1)
     # the result's active maps are the input's (carried); its crease layers are the record's
-    carried = Carried(layers, edge_verts, *attributes.flags_of(mesh)[:4], _creases(mesh, n))
+    carried = Carried(layers, edge_verts, *flags_of(mesh)[:4], _creases(mesh, n))
     sizes = _get(attrs[ids.SNAP_FACE_SIZE].data, "value", n["FACE"], np.int32)[:F]
     offsets = np.zeros(F + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])
