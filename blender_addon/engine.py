@@ -70,7 +70,7 @@ from .progress import silent
 from .stencil_update import apply_stencil
 from .states import (  # noqa: F401  (engine.SurfaceState, engine.stats, ... for callers)
     SurfaceState, SyncResult, get_state, gone, known, prune, state_key, stats)
-from .states import states as _states
+from .states import bindings, states as _states
 
 log = logging.getLogger(__name__)
 
@@ -84,6 +84,7 @@ def dragging(obj) -> bool:
 def clear_caches() -> None:
     """Forget every cache (file load, unregister); results rebuild on demand."""
     _states.clear()
+    bindings.clear()
     results.clear()
 
 
@@ -296,7 +297,7 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
     outcome = _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0,
                       stale)
     if outcome is None:
-        bound = _rest_shape(mod, res, shown, (st, view), inp, settings, force, render)
+        bound = _rest_shape(obj, mod, res, shown, (st, view), inp, settings, force, render)
         outcome = _rebuild(obj, mod, res, settings, skey, inp, (resolution, crz, bound, force),
                            progress, t0, render)
     return SyncResult(outcome.status, outcome.message, outcome.rebind, retry) if retry else outcome
@@ -370,13 +371,13 @@ def not_finite_message(points: np.ndarray, points32: np.ndarray) -> str:
             f"(first {bad[:5].tolist()}); base mesh left as is")
 
 
-def _rest_shape(mod, res, shown, states, inp, settings, force, render):
+def _rest_shape(obj, mod, res, shown, states, inp, settings, force, render):
     """The rest shape a build keeps (Rest Shape Bound: rest.py), or None: bind the current
     positions (a Rebuild, Follow, a new topology, none kept)."""
     if force or settings["rest"] != "bound":
         return None
     results = (shown, res) + ((gn.get_result(mod),) if render else ())
-    return rest_mod.kept(inp, states, results)
+    return rest_mod.kept(inp, states, results, bindings.get(state_key(obj, mod), ()))
 
 
 def _held_models(obj, mod, render: bool, force: bool) -> tuple:
@@ -426,6 +427,7 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
     previous = prev.transfer if prev is not None and prev.result_uid == st.result_uid else None
     st.transfer = write_geometry(res.data, built, previous, inp)
     rest_mod.write(res.data, st.rest if settings["rest"] == "bound" else None)  # kept with it
+    rest_mod.remember(bindings, key[:2], inp, st.rest if settings["rest"] == "bound" else None)
     misfit = snapshot.misfit(res.data, inp)
     if misfit:  # the record of the input must fit on the output
         return _fail(obj, mod, key, st, (

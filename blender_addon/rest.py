@@ -11,8 +11,10 @@ copied with the object: a duplicate reads the original's result), and a build wi
 cached state finds it there.
 
 A new R (the current positions) is bound only by a Rebuild (``force``), a change of the
-mesh's topology (R no longer fits it), Rest Shape switched to Bound (the state it comes
-from was Follow), or where none is kept (the first build, a result of an older version).
+mesh's topology (R no longer fits it; a topology the modifier was bound with earlier in the
+session gets its rest shape back, :func:`remember`: an Edit Mode undo of a topology change),
+Rest Shape switched to Bound (the state it comes from was Follow), or where none is kept
+(the first build, a result of an older version).
 Rest Shape Follow stores none (its rest shape is always the current mesh).
 """
 from __future__ import annotations
@@ -20,6 +22,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import ids, snapshot
+
+KEPT = 8  # topologies whose rest shapes a modifier remembers (rest shapes of V x 24 bytes)
 
 
 def _is_result(res) -> bool:
@@ -63,11 +67,15 @@ def write(mesh, rest) -> None:
                  len(mesh.vertices))
 
 
-def kept(inp, states, results) -> np.ndarray | None:
+def kept(inp, states, results, earlier=()) -> np.ndarray | None:
     """The rest shape a Bound build of `inp` keeps (None: bind the current positions):
     the first of `states` (engine.SurfaceState or None: this result's, the viewport's)
     that was Bound with `inp`'s topology, else the first of `results` (result objects or
-    None: the one shown, its own) storing one that fits."""
+    None: the one shown, its own) storing one that fits, else, where a state was Bound
+    with another topology (the mesh's topology changed), the rest shape `earlier`
+    (:func:`remember`'s list) holds for `inp`'s topology: an Edit Mode undo of a topology
+    change restores the mesh but not the result storing the rest shape (found by a test
+    of the interactive workflow: the surface bound anew, 0.04 off on a grid)."""
     for st in states:
         if (st is not None and st.rest is not None and st.input is not None and _was_bound(st)
                 and _fits(inp, st.input.offsets, st.input.corners, len(st.rest))):
@@ -77,4 +85,20 @@ def kept(inp, states, results) -> np.ndarray | None:
             rest = read(res.data, inp)
             if rest is not None:
                 return rest
+    if any(st is not None and _was_bound(st) for st in states):
+        for offsets, corners, rest in reversed(earlier):
+            if _fits(inp, offsets, corners, len(rest)):
+                return rest
     return None
+
+
+def remember(bindings: dict, key: tuple, inp, rest) -> None:
+    """Note in `bindings[key]` (a modifier's list, newest last) that a build of `inp` was
+    bound to `rest` (V, 3), replacing an earlier rest shape of the same topology; `rest`
+    None (a Follow build) forgets the modifier's list: switching back to Bound binds the
+    current shape, as documented."""
+    if rest is None:
+        bindings.pop(key, None)
+        return
+    entries = [e for e in bindings.get(key, ()) if not _fits(inp, e[0], e[1], len(e[2]))]
+    bindings[key] = entries[-(KEPT - 1):] + [(inp.offsets, inp.corners, rest)]

@@ -50,6 +50,10 @@ class SyncResult:
 
 
 states: dict[tuple, SurfaceState] = {}
+# Rest Shape Bound: the rest shapes each modifier was bound to, one per topology (rest.py):
+# an Edit Mode undo across a topology change restores the edit mesh, not the hidden result
+# that stores the rest shape, so the earlier topology's binding is found here
+bindings: dict[tuple, list] = {}
 stats: Counter = Counter()  # how often each SyncResult status occurred (tests, panel)
 
 
@@ -77,3 +81,5 @@ def prune(alive_keys) -> None:
     """Drop the states of modifiers that no longer exist (render states with them)."""
     for key in [k for k in states if k[:2] not in alive_keys]:
         del states[key]
+    for key in [k for k in bindings if k not in alive_keys]:
+        del bindings[key]

@@ -124,6 +124,50 @@ def test_only_a_rebuild_a_new_topology_or_switching_to_bound_binds_the_current_s
     assert api.status(obj)["error"] == ""
 
 
+def test_an_edit_mode_undo_of_a_topology_change_restores_the_earlier_binding(blender):
+    """Found by a test of the interactive workflow: Edit Mode undo restores the edit mesh,
+    not the hidden result storing the rest shape, so undoing a face deletion bound the
+    surface anew to the edited positions (0.04 off on this grid). The add-on remembers
+    each topology's rest shape (rest.remember); a Follow build forgets them."""
+    import bmesh
+    from blender_addon import api
+
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=3, y_subdivisions=3, size=2.0)
+    obj = bpy.context.active_object
+    name = obj.name
+    X = positions(obj.data)
+    api.add_surface(obj, resolution=2, rest="bound")
+    obj.data.vertices[5].co.z += 0.4  # a deform of the bound surface
+    obj.data.update()
+    X2 = positions(obj.data)
+    P = evaluated(obj)
+    assert np.abs(P - _surface(obj, X2, X, resolution=2)).max() <= 1e-5
+    bpy.ops.ed.undo_push(message="moved")
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.ed.undo_push(message="edit")
+    bm = bmesh.from_edit_mesh(obj.data)
+    bm.faces.ensure_lookup_table()
+    bmesh.ops.delete(bm, geom=[bm.faces[0]], context="FACES_ONLY")
+    bmesh.update_edit_mesh(obj.data)
+    bpy.context.view_layer.update()
+    assert len(evaluated(obj)) < len(P)  # the new topology's surface, bound anew
+    bpy.ops.ed.undo_push(message="deleted")
+    bpy.ops.ed.undo()
+    obj = bpy.data.objects[name]  # undo replaces the Python objects
+    assert obj.mode == "EDIT"
+    bpy.context.view_layer.update()
+    undone = evaluated(obj)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert np.abs(positions(obj.data) - X2).max() <= 1e-6
+    assert np.abs(undone - P).max() <= 1e-5  # bound to X again, not to X2
+    assert np.abs(_surface(obj, X2, None, resolution=2) - P).max() > 1e-2  # (they differ)
+    # Follow forgets the remembered rest shapes: back to Bound binds the current shape
+    api.set_settings(obj, rest="follow")
+    evaluated(obj)
+    api.set_settings(obj, rest="bound")
+    assert np.abs(evaluated(obj) - _surface(obj, X2, None, resolution=2)).max() <= 1e-5
+
+
 def test_the_stored_rest_shape_never_reaches_apply(blender):
     from blender_addon import api, ids
 
