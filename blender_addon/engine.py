@@ -78,7 +78,7 @@ log = logging.getLogger(__name__)
 def dragging(obj) -> bool:
     """An interactive Edit Mode session (a window manager exists, not background): the
     one case where a Follow surface is previewed linearly while the user drags."""
-    return obj.mode == "EDIT" and not bpy.app.background
+    return mesh_io.editing(obj) and not bpy.app.background
 
 
 def clear_caches() -> None:
@@ -128,7 +128,7 @@ def _clear_stale_render_error(obj, mod, settings, crz) -> None:
 
 def is_active(obj, mod) -> bool:
     """Is the modifier evaluated at all now (else there is nothing to keep current)?"""
-    edit = obj.mode == "EDIT"
+    edit = mesh_io.editing(obj)
     return (mod.show_viewport or mod.show_render) and (not edit or mod.show_in_editmode)
 
 

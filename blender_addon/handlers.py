@@ -37,7 +37,7 @@ import time
 import bpy
 from bpy.app.handlers import persistent
 
-from . import engine, ids, leftovers, linked, results
+from . import engine, ids, leftovers, linked, mesh_io, results
 from . import geometry_nodes as gn
 from .errors import PREFIX
 from .progress import Progress
@@ -202,7 +202,7 @@ def _candidates(depsgraph):
         if not (update.is_updated_geometry or update.is_updated_shading):
             continue
         obj = idb.original
-        if not update.is_updated_geometry and obj.mode == "EDIT":
+        if not update.is_updated_geometry and mesh_io.editing(obj):
             continue  # Edit Mode selection (ID_RECALC_SELECT): nothing a surface depends on
         if gn.gerbs_modifiers(obj):
             objects.append(obj)

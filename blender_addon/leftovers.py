@@ -35,7 +35,7 @@ def remove_channels(uids) -> int:
         if obj.session_uid not in uids or obj.type != "MESH" or gn.gerbs_modifiers(obj):
             continue
         mesh = obj.data
-        if (mesh is None or obj.mode == "EDIT" or mesh.users > 1 or obj.library is not None
+        if (mesh is None or mesh.is_editmode or mesh.users > 1 or obj.library is not None
                 or mesh.library is not None):
             continue
         names = [a.name for a in mesh.attributes if a.name.startswith(ids.CHANNEL_PREFIX)]

@@ -182,6 +182,16 @@ def read_mesh(mesh, normals: bool = False, positions=None, sizes=None) -> MeshIn
         normals=read_normals(mesh) if normals else None, corner_loops=loops)
 
 
+def editing(obj) -> bool:
+    """Is `obj`'s mesh in Edit Mode: its own, or a linked duplicate's that shares the mesh
+    (Blender then evaluates every user of the mesh from the edit mesh, with the modifiers'
+    Edit Mode visibility, while the mesh's own arrays keep the state before Edit Mode; found
+    by a test of linked duplicates: the other object's sync read those and found nothing
+    changed, or failed reading its attributes)."""
+    return obj.mode == "EDIT" or (obj.type == "MESH" and obj.data is not None
+                                  and obj.data.is_editmode)
+
+
 @contextlib.contextmanager
 def edit_mesh_copy(mesh):
     """A temporary copy of an original mesh in Edit Mode, made from its BMesh in C

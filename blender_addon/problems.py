@@ -11,7 +11,7 @@ import textwrap
 
 import bpy
 
-from . import finite, ids
+from . import finite, ids, mesh_io
 from .errors import PREFIX
 
 _PLAIN = {
@@ -107,6 +107,6 @@ def on_base_mesh(obj, mod) -> bool:
     """Do the indices of a build's problem name elements of the base mesh (no enabled
     modifier above GERBS makes the mesh it receives)?"""
     mods = list(obj.modifiers)
-    edit = obj.mode == "EDIT"
+    edit = mesh_io.editing(obj)
     return not any(m.show_viewport and (not edit or m.show_in_editmode)
                    for m in mods[:mods.index(mod)])

@@ -55,7 +55,7 @@ def _enabled(mod, edit: bool, render: bool) -> bool:
 
 
 def stack_of(obj, mod, render: bool) -> Stack:
-    edit = obj.mode == "EDIT" and not render
+    edit = mesh_io.editing(obj) and not render
     mods = list(obj.modifiers)
     k = mods.index(mod)
     return Stack(tuple(m for m in mods[:k] if _enabled(m, edit, render)),
@@ -192,7 +192,7 @@ def read_base(obj, depsgraph, normals: bool, carried_only: bool = False):
     """The mesh data-block itself as evaluated (in Edit Mode its BMesh): the input when no
     shape key and no modifier above changes it."""
     groups = group_names(obj)
-    if obj.mode == "EDIT":
+    if mesh_io.editing(obj):
         with mesh_io.edit_mesh_copy(obj.data) as tmp:
             return _base_of(tmp, groups, normals, carried_only)
     return _base_of(obj.data.evaluated_get(depsgraph), groups, normals, carried_only)
@@ -208,5 +208,5 @@ def _base_of(mesh, groups, normals, carried_only):
 def base_names(obj, depsgraph) -> set:
     """The names the mesh data-block itself would carry (cheap: no values read; in Edit
     Mode the BMesh's layers, which is all the original mesh's attributes hold then)."""
-    mesh = obj.data if obj.mode == "EDIT" else obj.data.evaluated_get(depsgraph)
+    mesh = obj.data if mesh_io.editing(obj) else obj.data.evaluated_get(depsgraph)
     return attributes.names_of(mesh, group_names(obj))

@@ -100,3 +100,45 @@ def test_copies_render_their_own_render_resolution(blender):
     assert counts[cube.name] == counts[dup.name] == 8 + 12 * 3 + 6 * 9
     assert gn.get_result(dup.modifiers[0], True) != gn.get_result(cube.modifiers[0], True)
     assert _errors(cube, dup) == ["", ""]
+
+
+@pytest.mark.parametrize("below", [None, "TRIANGULATE"])
+def test_a_linked_duplicate_follows_edits_made_in_the_other_objects_edit_mode(blender, below):
+    """Found by a test of linked duplicates: with the shared mesh in Edit Mode on one
+    object, the other (in Object Mode) read the mesh's arrays, which keep the state before
+    Edit Mode, found nothing changed and showed its cage (no error), or with a modifier
+    below GERBS failed reading its attributes ("internal error", a raw TypeError from
+    api.update). Blender evaluates every user of an edit mesh from it; so does the sync."""
+    import bmesh
+    from blender_addon import api
+
+    from .helpers import fresh_surface, positions, topology
+
+    obj = make_object("icosphere")
+    api.add_surface(obj, resolution=R)
+    dup = _duplicate(obj, "alt_d")
+    if below:
+        dup.modifiers.new("below", below)
+    n_before = len(evaluated(dup))
+    bpy.ops.object.select_all(action="DESELECT")
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+    bpy.ops.object.mode_set(mode="EDIT")
+    assert dup.mode == "OBJECT" and dup.data.is_editmode
+    bm = bmesh.from_edit_mesh(obj.data)
+    bm.verts.ensure_lookup_table()
+    bm.verts[0].co.z += 0.4
+    bmesh.update_edit_mesh(obj.data)
+    bpy.context.view_layer.update()
+    P_dup, P_obj = evaluated(dup), evaluated(obj)
+    api.update(dup)  # no exception, no error
+    assert _errors(obj, dup) == ["", ""]
+    bpy.ops.object.mode_set(mode="OBJECT")
+    X = positions(obj.data)
+    want = fresh_surface(X, *topology(obj.data), R)
+    assert np.abs(P_obj - want).max() <= 1e-5
+    if below is None:
+        assert np.abs(P_dup - want).max() <= 1e-5  # the edited surface, not the cage
+    else:
+        assert len(P_dup) == n_before > len(X)  # the surface triangulated, not the cage
+        assert np.abs(evaluated(dup)[:len(X)] - X).max() <= 1e-5
