@@ -6,10 +6,42 @@ object reports without changing what it computes (the kernel is baked into its c
 so it raises instead. Lazy caches (a transposed matrix made on first use, a memo) are
 written by the class itself through :meth:`Immutable._cache`; ``functools.cached_property``
 writes the instance dictionary directly and needs nothing.
+
+Pickling and ``copy.deepcopy`` keep the read-only arrays read-only: numpy restores every
+array writeable, so the state carries the list of the arrays that were not (pickle and
+deepcopy restore shared objects once, so the list names the restored arrays themselves).
+Found by a review: an unpickled curve's ``local_curves[...] = 7`` changed what it computed.
 """
 from __future__ import annotations
 
+import numpy as np
+
 __all__ = ["Immutable"]
+
+_READ_ONLY = "_read_only_arrays"
+
+
+def _read_only_arrays(state: dict) -> list:
+    """The non-writeable numpy arrays reachable from `state` through containers and the
+    package's own objects (each once)."""
+    out, seen, todo = [], set(), list(state.values())
+    while todo:
+        x = todo.pop()
+        if id(x) in seen:
+            continue
+        seen.add(id(x))
+        if isinstance(x, np.ndarray):
+            if not x.flags.writeable and x.dtype != object:
+                out.append(x)
+        elif isinstance(x, dict):
+            todo.extend(x.values())
+        elif isinstance(x, (list, tuple, set, frozenset)):
+            todo.extend(x)
+        elif type(x).__module__.startswith("gerbs_core.") and not isinstance(x, type):
+            todo.extend(getattr(x, "__dict__", {}).values())
+            for name in getattr(type(x), "__slots__", ()):
+                todo.append(getattr(x, name, None))
+    return out
 
 
 class Immutable:
@@ -29,6 +61,15 @@ class Immutable:
             raise AttributeError(f"{type(self).__name__} objects are immutable: cannot "
                                  f"delete {name!r}")
         object.__delattr__(self, name)
+
+    def __getstate__(self):
+        return {**self.__dict__, _READ_ONLY: _read_only_arrays(self.__dict__)}
+
+    def __setstate__(self, state: dict) -> None:
+        state = dict(state)
+        for a in state.pop(_READ_ONLY, ()):
+            a.setflags(write=False)
+        self.__dict__.update(state)
 
     def _freeze(self) -> None:
         object.__setattr__(self, "_frozen", True)

@@ -32,6 +32,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import InvalidParameterError
+from ..immutable import Immutable
 from ..inputs import check_index, real_array
 from ..kernels import Kernel, as_kernel
 from ..kernels.base import as_float_array, check_order
@@ -84,7 +85,7 @@ def _check_kernels(kernel, n_intervals: int):
     return tuple(out), None
 
 
-class GERBSBasis:
+class GERBSBasis(Immutable):
     """The GERBS basis G_1..G_n of eq. (3) on knots t_0 < ... < t_{n+1}.
 
     Parameters
@@ -102,6 +103,8 @@ class GERBSBasis:
         self._knots = _check_knots(knots)
         self._kernels, self._kernel = _check_kernels(kernel, self._knots.size - 1)
         self._h = np.diff(self._knots)
+        self._h.setflags(write=False)
+        self._freeze()
 
     @property
     def knots(self) -> np.ndarray:
@@ -190,7 +193,7 @@ class GERBSBasis:
         return out.reshape(t.shape + (self.n,))
 
 
-class GERBSCurve:
+class GERBSCurve(Immutable):
     """GERBS curve c(t) = sum_j G_j(t) l_j(t) (eq. (3) basis, local curves l_j).
 
     Parameters
@@ -230,6 +233,7 @@ class GERBSCurve:
         L.setflags(write=False)
         self._L = L
         self._nu0 = int(_nu0)
+        self._freeze()
 
     @property
     def basis(self) -> GERBSBasis:
@@ -252,7 +256,8 @@ class GERBSCurve:
         """The curve t -> c^(nu)(t), as an object with the same interface."""
         nu = check_order(nu, self._basis.max_order - self._nu0)
         out = GERBSCurve.__new__(GERBSCurve)
-        out._basis, out._L, out._nu0 = self._basis, self._L, self._nu0 + nu
+        out.__dict__.update(_basis=self._basis, _L=self._L, _nu0=self._nu0 + nu)
+        out._freeze()
         return out
 
     def _local(self, j: np.ndarray, dt: np.ndarray, r: int) -> np.ndarray:
