@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidMeshError
+from .validation import not_a_polygon
 
 __all__ = ["FaceLayouts", "face_layouts", "cyclic_polygon"]
 
@@ -152,7 +153,7 @@ def face_layouts(topo, positions: np.ndarray) -> FaceLayouts:
         idx = off[fs][:, None] + np.arange(n)[None, :]
         ln = lengths[idx]
         lmax = ln.max(axis=1)
-        degenerate = (ln.min(axis=1) <= 0) | ~(2.0 * lmax < ln.sum(axis=1) * (1 - 1e-12))
+        degenerate = (ln.min(axis=1) <= 0) | not_a_polygon(lmax, ln.sum(axis=1))
         if np.any(degenerate):
             bad.extend(fs[degenerate].tolist())
             continue

@@ -13,7 +13,7 @@ from collections import defaultdict
 
 import numpy as np
 
-from .validation import corner_successors, flat_faces
+from .validation import chain_faces, corner_successors, flat_faces
 
 __all__ = ["weld_map", "clean_faces", "merge_zero_area"]
 
@@ -188,6 +188,7 @@ def merge_zero_area(x, sizes, flat, origin, rtol, notes):
     flat_mask = flat_faces(x, sizes, flat, rtol)
     if not flat_mask.any():
         return sizes, flat, origin
+    chain = chain_faces(x, sizes, flat)  # collinear to the positions' rounding
     offsets = np.r_[0, np.cumsum(sizes)]
     faces = [flat[offsets[f]:offsets[f + 1]].tolist() for f in range(len(sizes))]
     on_edge = defaultdict(set)
@@ -203,7 +204,7 @@ def merge_zero_area(x, sizes, flat, origin, rtol, notes):
         u, v = vs[k], vs[(k + 1) % len(vs)]
         hosts = on_edge[(min(u, v), max(u, v))] - {d}
         new = _absorb(faces[next(iter(hosts))], vs, k) \
-            if len(hosts) == 1 and _collinear(x, vs) else None
+            if len(hosts) == 1 and (chain[d] or _collinear(x, vs)) else None
         for a, b in zip(vs, vs[1:] + vs[:1]):
             on_edge[(min(a, b), max(a, b))].discard(d)
         alive[d] = False

@@ -19,12 +19,17 @@ from ..errors import InvalidMeshError, InvalidParameterError
 from .topology import MeshTopology
 from .topology_build import edge_error
 
-__all__ = ["validate_geometry", "flat_faces", "corner_successors", "check_finite", "OUTLIER_FACTOR"]
+__all__ = ["validate_geometry", "flat_faces", "chain_faces", "not_a_polygon", "corner_successors",
+           "check_finite", "OUTLIER_FACTOR"]
 
 # A vertex whose shortest edge is 1e6 median edge lengths away is a stray coordinate,
 # not a feature: at that scale ratio float64 keeps only ~10 digits of the rest of the
 # mesh in any expression that mixes both.
 OUTLIER_FACTOR = 1e6
+
+# The margin by which a face's longest edge must be shorter than the sum of its others for
+# the face to have a convex layout polygon (layout.face_layouts, repair's zero-area faces).
+CHAIN_RTOL = 1e-12
 
 
 def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12) -> None:
@@ -99,13 +104,38 @@ def corner_successors(sizes) -> np.ndarray:
     return nxt
 
 
+def not_a_polygon(longest, total) -> np.ndarray:
+    """Bool array: faces whose longest edge (`longest`) is not shorter than the sum of the
+    others (`total` - `longest`) by a relative margin of ``CHAIN_RTOL`` (arrays of the same
+    shape): no convex polygon has these edge lengths (:func:`layout.face_layouts`), and
+    the corners lie on a chain along the longest edge, within about
+    ``sqrt(CHAIN_RTOL / 2)`` of its length."""
+    return ~(2.0 * longest < total * (1.0 - CHAIN_RTOL))
+
+
+def chain_faces(x, sizes, flat) -> np.ndarray:
+    """(F,) bool: faces (CSR as :func:`flat_faces`) whose edge lengths admit no convex
+    polygon (:func:`not_a_polygon`): collinear corners, to the rounding of the positions."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    cf = np.repeat(np.arange(len(sizes)), sizes)
+    length = np.linalg.norm(x[flat[corner_successors(sizes)]] - x[flat], axis=1)
+    longest, total = np.zeros(len(sizes)), np.zeros(len(sizes))
+    np.maximum.at(longest, cf, length)
+    np.add.at(total, cf, length)
+    return not_a_polygon(longest, total)
+
+
 def flat_faces(x, sizes, flat, rtol: float = 1e-12) -> np.ndarray:
     """(F,) bool: faces (CSR: corner counts ``sizes`` (F,), vertices ``flat`` (C,)) of zero
-    area, |vector area| <= rtol * (longest edge of the face)**2; positions x (V, 3).
+    area, |vector area| <= rtol * (longest edge of the face)**2, or whose edge lengths
+    admit no convex polygon (:func:`chain_faces`); positions x (V, 3).
 
     The vector area sum_k x_k x x_{k+1} / 2 is taken relative to the face's first corner
     (no cancellation), so it vanishes exactly for collinear corners and for
-    self-cancelling polygons."""
+    self-cancelling polygons. Collinear corners stored in single precision (Blender's
+    positions) keep an area of about 1e-8 of the edge squared, but their edge lengths
+    admit no polygon: found by a test with messy meshes, whose T-junction sliver was
+    repaired from float64 positions and refused from Blender's."""
     sizes = np.asarray(sizes, dtype=np.int64)
     F = len(sizes)
     cf = np.repeat(np.arange(F), sizes)
@@ -118,4 +148,4 @@ def flat_faces(x, sizes, flat, rtol: float = 1e-12) -> np.ndarray:
     np.add.at(varea, cf, np.cross(p, q))  # twice the vector area
     longest = np.zeros(F)
     np.maximum.at(longest, cf, np.linalg.norm(q - p, axis=1))
-    return 0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2
+    return (0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2) | chain_faces(x, sizes, flat)

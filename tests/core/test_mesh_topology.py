@@ -153,10 +153,16 @@ def test_geometry_validation_tags_and_tolerance():
     with pytest.raises(InvalidMeshError) as info:
         validate_geometry(v[:-1], T)
     assert info.value.problem == "bad_shape"
-    # slivers with a 0.001 degree angle and extreme scales are accepted
+    # slivers with a 0.01 degree angle and extreme scales are accepted; at 1e-5 degrees
+    # the edge lengths admit no convex polygon to 1e-12 (what the layout needs): refused
     x = v.copy()
-    x[f0[0]] = x[f0[1]] + 10 * (x[f0[2]] - x[f0[1]]) + [0, 0, np.tan(1e-5 * np.pi / 180)]
+    x[f0[0]] = x[f0[1]] + 10 * (x[f0[2]] - x[f0[1]]) + [0, 0, np.tan(1e-2 * np.pi / 180)]
     validate_geometry(x, T)
+    x[f0[0]] = x[f0[1]] + 10 * (x[f0[2]] - x[f0[1]]) + [0, 0, np.tan(1e-5 * np.pi / 180)]
+    with pytest.raises(InvalidMeshError) as info:
+        validate_geometry(x, T)
+    assert info.value.problem == "degenerate_face" and info.value.indices == (0,)
+    x = v.copy()
     for scale in (1e-6, 1e6):
         validate_geometry(v * scale + 3 * scale, T)
 

@@ -166,14 +166,16 @@ def test_near_degenerate_faces(height):
     X, faces = primitives.delaunay_patch(points=[(0, 0), (1, 0), (1, 1), (0, 1), (0.5, height),
                                                  (0.3, 0.6), (0.7, 0.5)])
     assert _min_angle(X, faces) < 1.0
+    surface = BlendingSurface(X, faces)
     if height <= 1e-6:
-        # edge lengths 0.5 + 1e-12 twice and 1: no strictly convex triangle to
-        # rounding -- refused with a specific error naming the face, not a crash
-        with pytest.raises(InvalidMeshError, match="convex polygon") as info:
-            BlendingSurface(X, faces)
-        assert len(info.value.indices) == 1
-        return
-    _check(BlendingSurface(X, faces), X)
+        # edge lengths 0.5 + 1e-12 twice and 1: no strictly convex triangle to rounding --
+        # a collinear face; its long edge is on the border, so it is dropped (it was
+        # refused before 2026-12-07, when Blender's single-precision collinear faces were
+        # found; across an inner edge it is merged: test_mesh_repair)
+        (w,) = surface.warnings
+        assert w.tag == "degenerate_face" and len(w.indices) == 1
+        assert surface.topology.n_faces == len(faces) - 1
+    _check(surface, X)
 
 
 @pytest.mark.parametrize("k", [3, 7, 12, 16, 20])
