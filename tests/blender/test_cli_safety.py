@@ -223,6 +223,7 @@ HUGE_CUBE = "".join(f"v {x} {y} {z}\n" for x in (-3e38, 3e38) for y in (-3e38, 3
     ("--memory-budget 0", ["--memory-budget"]), ("--merge-distance -1", ["--merge-distance"]),
     ("--merge-distance 0.5", ["--merge-distance", "closer than 0.5 collapsed every face"]),
     ("--kernel gauss", ["--kernel"]), ("no faces", ["empty"]),
+    ("nan in obj", ["NaN or infinite", "line(s) 3, 8", "2 vertices", "read them as 0"]),
     ("too large", ["memory"]), ("beyond float32", ["surface is not finite", "scale"]),
     ("missing folder", ["its folder", "does not exist", "create it first"]),
 ])
@@ -257,6 +258,10 @@ def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, 
         good.write_text(NO_FACES)
     elif case == "beyond float32":
         good.write_text(HUGE_CUBE)
+    elif case == "nan in obj":  # Blender's importer reads them as 0: a dented cube, exit 0
+        corners = [f"v {x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+        corners[1], corners[6] = "v 0 0 nan\n", "v 1 -INF 0\n"  # lines 3 and 8
+        good.write_text("# a cube\n" + "".join(corners) + HUGE_CUBE.split("\n", 8)[8])
     elif case == "too large":
         args += ["--resolution", "64", "--memory-budget", "1"]
     elif case == "missing folder":
@@ -269,3 +274,22 @@ def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, 
     assert sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*")) == before  # no mkdir
     if case == "output is a directory":
         assert list(target.iterdir()) == []
+
+
+def test_an_obj_output_too_fine_for_its_six_decimals_is_warned_about(tmp_path):
+    """Found by a test with messy meshes: Blender's OBJ exporter writes 6 decimals, and
+    Suzanne at 0.27 mm came back folded (794 output pairs above 60 degrees) with no word.
+    The CLI warns where the rounding moves points by more than 0.1% of an edge."""
+    tiny = tmp_path / "tiny.obj"
+    lines = [line.split() for line in SUZANNE.read_text().splitlines()]
+    tiny.write_text("".join(
+        ("v " + " ".join(f"{float(c) * 1e-3:.9f}" for c in w[1:4]) if w[:1] == ["v"]
+         else " ".join(w)) + "\n" for w in lines))
+    for src, ext, warned in ((tiny, ".obj", True), (tiny, ".glb", False),
+                             (SUZANNE, ".obj", False)):
+        out = cli(src, "-o", tmp_path / f"o{ext}", cwd=tmp_path)
+        assert out.returncode == 0, out.stderr
+        said = [line for line in out.stderr.splitlines() if "6 decimals" in line]
+        assert bool(said) == warned, out.stderr
+        if warned:
+            assert said[0].startswith("warning: ") and "write .glb" in said[0]
