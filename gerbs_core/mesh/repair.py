@@ -24,6 +24,9 @@ geometric tests use the rest shape when one is given):
    edge (the surface closes over them, through all their vertices); where that is not
    possible (a boundary edge, a self-cancelling polygon) they are dropped
    (``degenerate_face``) and the surface is bounded by their neighbours.
+   ``concave_face``: a face with a corner turning back by more than 10 degrees in its
+   plane is split along diagonals into convex faces (:mod:`gerbs_core.mesh.repair_concave`:
+   a face is laid out as a convex polygon, and the surface folds at a reflex corner).
 4. ``non_manifold_edge``: an edge of 3 or more faces is split into manifold sheets
    (:mod:`gerbs_core.mesh.repair_sheets`): faces are paired by consistent orientation
    and angle, so the smoothest continuations stay glued (the plane of a T-junction is
@@ -56,6 +59,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidMeshError, _short
+from . import repair_concave as rc
 from . import repair_faces as rf
 from . import repair_sheets as rs
 from .selection import selection_matrix
@@ -79,6 +83,8 @@ _TEXT = {
     "duplicate_face": "faces with the vertices of an earlier face: dropped",
     "zero_area_face": "zero-area (collinear) faces merged into the face across their longest "
                       "edge: the surface closes over them",
+    "concave_face": "concave faces (a corner turning back by more than 10 degrees) split "
+                    "into convex faces along diagonals: the surface is smooth across them",
     "non_manifold_edge": "edges of 3 or more faces split into manifold sheets (faces paired "
                          "by orientation and angle, an unpaired face has the edge as a "
                          "boundary)",
@@ -282,6 +288,7 @@ def repair_mesh(vertices, faces, *, merge_distance=None, rest_positions=None,
                                          rf.input_repeats(sizes0, flat0), notes)
     if len(sizes):
         sizes, flat, origin = rf.merge_zero_area(G, sizes, flat, origin, rtol, notes)
+        sizes, flat, origin = rc.split_concave(G, sizes, flat, origin, notes)
     if not len(sizes):
         if merge_distance is not None and _faces_without_merge(G, sizes0, flat0, rtol):
             from ..errors import InvalidParameterError

@@ -1,0 +1,91 @@
+"""Concave faces are split into convex ones (repair stage 3b, gerbs_core.mesh.repair_concave).
+
+Found by a test with messy meshes: every face is laid out as a convex polygon, so the
+surface of a flat star-shaped 12-gon folded over itself (36 of 192 output triangles
+reversed at r = 4), an L-shaped 12-gon likewise (6)."""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from gerbs_core import BlendingSurface
+from gerbs_core.mesh.repair_concave import _turns, concave_faces, convex_pieces
+
+from .test_mesh_repair import _check_surface, _tags
+
+
+def _star(n=12, inner=0.4):
+    t = 2 * np.pi * np.arange(n) / n
+    r = np.where(np.arange(n) % 2 == 0, 1.0, inner)
+    return np.stack([r * np.cos(t), r * np.sin(t), np.zeros(n)], axis=1)
+
+
+L12 = np.array([(0, 0), (1, 0), (2, 0), (2, 0.5), (2, 1), (1, 1), (1, 1.5), (1, 2), (0.5, 2),
+                (0, 2), (0, 1.5), (0, 1)], dtype=float)
+
+
+def _reversed(s, r=4):
+    P, T, _ = s.tessellate(r)
+    c = np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]])[:, 2]
+    return int((c * np.sign(np.median(c)) < 0).sum()), P
+
+
+@pytest.mark.parametrize("name", ["star", "L"])
+def test_a_flat_concave_ngon_does_not_fold(name):
+    X = _star() if name == "star" else np.c_[L12, np.zeros(12)]
+    # rotated out of the xy-plane: the test is in the face's own plane
+    R = np.linalg.qr(np.random.default_rng(3).normal(size=(3, 3)))[0]
+    s = BlendingSurface(X @ R.T, [tuple(range(12))])
+    w = _tags(s)
+    assert list(w) == ["concave_face"] and w["concave_face"].indices == (0,)
+    assert s.topology.n_faces > 1 and (s.face_map == 0).all()
+    flipped, P = _reversed(BlendingSurface(X, [tuple(range(12))]))
+    assert flipped == 0
+    assert np.abs((P - X[0]) @ np.array([0, 0, 1.0])).max() <= 1e-12  # in its plane
+    _check_surface(s, X @ R.T)
+
+
+def test_a_dart_quad_is_split_only_beyond_ten_degrees():
+    """A flat dart (reflex corner at vertex 1): kept at 5 degrees (it does not fold), two
+    triangles at 40 (57 of 256 reversed triangles at r = 8 before at 90 degrees)."""
+    for degrees, split in ((5, False), (40, True), (90, True)):
+        h = math.tan(math.radians(degrees / 2))
+        X = np.array([(0, 0, 0), (1, h, 0), (2, 0, 0), (1, 1.5, 0)], dtype=float)
+        s = BlendingSurface(X, [(0, 1, 2, 3)])
+        assert (s.topology.n_faces == 2) == split
+        assert sorted(s.topology.face_sizes.tolist()) == ([3, 3] if split else [4])
+        assert _reversed(s, 8)[0] == 0
+
+
+def test_mildly_concave_quads_of_real_meshes_are_kept():
+    """Suzanne has two quads turning back by about 1 degree: not split (bench_shape's
+    real meshes are otherwise untouched by this stage)."""
+    from pathlib import Path
+    from gerbs_core.datasets.obj import read_obj
+
+    V, F = read_obj(str(Path(__file__).resolve().parents[2] / "examples" / "suzanne.obj"))[:2]
+    sizes = np.array([len(f) for f in F])
+    flat = np.concatenate([np.asarray(f) for f in F])
+    assert not concave_faces(np.asarray(V, float), sizes, flat).any()
+
+
+def _area(p):
+    return 0.5 * np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(0.2, 1.0), min_size=4, max_size=24), st.floats(0, 6.28))
+def test_convex_pieces_cover_a_star_shaped_polygon_with_convex_polygons(radii, phase):
+    n = len(radii)
+    t = phase + 2 * np.pi * np.arange(n) / n
+    p = np.stack([np.array(radii) * np.cos(t), np.array(radii) * np.sin(t)], axis=1)
+    pieces = convex_pieces(p)
+    assert pieces and sorted(set(i for q in pieces for i in q)) == list(range(n))
+    for q in pieces:
+        assert len(q) >= 3 and (_turns(p[q]) >= -1e-9).all()  # convex, counter-clockwise
+    assert sum(_area(p[q]) for q in pieces) == pytest.approx(_area(p), rel=1e-12)
+    reflex = int((_turns(p) < 0).sum())
+    assert len(pieces) <= max(1, 4 * reflex) and len(pieces) <= n - 2
+    if reflex == 0:
+        assert len(pieces) == 1
