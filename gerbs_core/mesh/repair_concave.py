@@ -26,6 +26,7 @@ from .validation import corner_successors
 
 REFLEX = math.radians(10.0)  # a corner turning back by more than this makes a face concave
 _STRAIGHT = 1e-9  # |turn| below this (radians) counts as a straight corner: still convex
+_TIE = 1e-6  # ears whose smallest angles differ by less (radians) are equally good
 
 
 def _turns(p2: np.ndarray) -> np.ndarray:
@@ -99,8 +100,8 @@ def _ears(p2: np.ndarray) -> list:
             a, b, c = P[i], P[k], P[j]
             angles = [abs(math.atan2(np.cross(v - u, w - u), np.dot(v - u, w - u)))
                       for u, v, w in ((a, b, c), (b, c, a), (c, a, b))]
-            if min(angles) > best_angle:
-                best, best_angle = k, min(angles)
+            if min(angles) > best_angle + _TIE:  # ties go to the first corner: a split
+                best, best_angle = k, min(angles)  # that rounding cannot change
         if best is None:  # not a simple polygon in this plane: no ear to cut
             return []
         n = len(ring)
