@@ -9,10 +9,13 @@ area; a flat dart quad folds from a reflex angle of about 20 degrees (r = 8: 3 r
 triangles at 20, 57 at 90; none at 10).
 
 A face with a corner turning back by more than ``REFLEX`` (10 degrees) in the plane of
-its vector area is split along diagonals into convex pieces: ear clipping (at each step
-the ear whose smallest angle is largest), then Hertel-Mehlhorn (a diagonal is removed
-again wherever both of its ends stay convex, so a concave quad gives two triangles and
-an L-shaped hexagon two quads). No vertex is added; the pieces keep the face's
+its vector area is cut along diagonals until every corner of every piece is below
+``LIMIT`` (179 degrees: straight corners are cut too): each cut starts at such a corner
+and is the diagonal that resolves the most of them at its ends, with the largest
+smallest angle there, so a concave quad gives two triangles and an L-shaped hexagon two
+quads. (Ear clipping
+followed by Hertel-Mehlhorn was tried first: the star came out in eight pieces of mixed
+shapes whose seams showed as ridges on an extruded star, rendered.) No vertex is added; the pieces keep the face's
 orientation and its input index (``face_map``), and the surface is C-infinity across the
 new edges. Faces turning back by less (Suzanne has two quads at 1 degree) are kept.
 """
@@ -25,7 +28,10 @@ import numpy as np
 from .validation import corner_successors
 
 REFLEX = math.radians(10.0)  # a corner turning back by more than this makes a face concave
-_STRAIGHT = 1e-9  # |turn| below this (radians) counts as a straight corner: still convex
+# the largest corner a piece keeps: straight corners are cut too (a piece whose sides
+# have collinear corners is laid out far from its shape: the L-shaped 12-gon cut in two
+# with its midpoints still folded, 1 reversed output triangle at r = 4)
+LIMIT = math.radians(179.0)
 _TIE = 1e-6  # ears whose smallest angles differ by less (radians) are equally good
 
 
@@ -73,79 +79,91 @@ def _plane(points: np.ndarray) -> np.ndarray:
     return np.stack([points @ u, points @ np.cross(normal, u)], axis=1)
 
 
-def _inside(tri: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """(m,) bool: points (m, 2) inside or on the counter-clockwise triangle (3, 2)."""
-    out = np.ones(len(pts), dtype=bool)
-    for a, b in ((0, 1), (1, 2), (2, 0)):
-        d = tri[b] - tri[a]
-        out &= d[0] * (pts[:, 1] - tri[a, 1]) - d[1] * (pts[:, 0] - tri[a, 0]) >= 0
-    return out
+def _cross(o, a, b):
+    """z of (a - o) x (b - o), broadcast over leading axes of (..., 2) arrays."""
+    return (a[..., 0] - o[..., 0]) * (b[..., 1] - o[..., 1]) - \
+        (a[..., 1] - o[..., 1]) * (b[..., 0] - o[..., 0])
 
 
-def _ears(p2: np.ndarray) -> list:
-    """Triangles (local corner index triples, counter-clockwise) of the simple polygon p2
-    (n, 2), by ear clipping, the ear with the largest smallest angle first."""
-    ring = list(range(len(p2)))
-    tris = []
-    while len(ring) > 3:
-        P = p2[ring]
-        turn = _turns(P)
-        best, best_angle = None, -1.0
-        for k in np.flatnonzero(turn > _STRAIGHT):
-            i, j = (k - 1) % len(ring), (k + 1) % len(ring)
-            others = np.ones(len(ring), dtype=bool)
-            others[[i, k, j]] = False
-            if _inside(P[[i, k, j]], P[others]).any():
-                continue
-            a, b, c = P[i], P[k], P[j]
-            angles = [abs(math.atan2(np.cross(v - u, w - u), np.dot(v - u, w - u)))
-                      for u, v, w in ((a, b, c), (b, c, a), (c, a, b))]
-            if min(angles) > best_angle + _TIE:  # ties go to the first corner: a split
-                best, best_angle = k, min(angles)  # that rounding cannot change
-        if best is None:  # not a simple polygon in this plane: no ear to cut
-            return []
-        n = len(ring)
-        tris.append([ring[(best - 1) % n], ring[best], ring[(best + 1) % n]])
-        del ring[best]
-    return tris + [ring]
+def _diagonals(P: np.ndarray, i: int) -> np.ndarray:
+    """(m,) bool: corners j such that the segment from corner i to j is a diagonal of the
+    counter-clockwise simple polygon P (m, 2): it leaves i into the polygon's interior
+    angle and meets no side (nor passes through a corner) but at its ends."""
+    m = len(P)
+    j = np.arange(m)
+    a, o, b = P[(i - 1) % m], P[i], P[(i + 1) % m]
+    Q = P[j]
+    if _cross(a, o, b) > 0:  # convex corner: strictly between the two sides
+        cone = (_cross(o, Q, a) > 0) & (_cross(Q, o, b) > 0)
+    else:  # reflex: not in the outside wedge
+        cone = ~((_cross(o, Q, b) >= 0) & (_cross(Q, o, a) >= 0))
+    s0, s1 = P, np.roll(P, -1, axis=0)  # sides k -> k + 1
+    O, Qj = o[None, None], Q[:, None]
+    d1, d2 = _cross(O, Qj, s0[None]), _cross(O, Qj, s1[None])
+    d3, d4 = _cross(s0[None], s1[None], O), _cross(s0[None], s1[None], Qj)
+    proper = (d1 * d2 < 0) & (d3 * d4 < 0)
+    # a corner on the open segment (collinear, between the ends)
+    t = np.einsum("jkc,jc->jk", P[None] - o, Q - o) / np.maximum(
+        np.einsum("jc,jc->j", Q - o, Q - o), 1e-300)[:, None]
+    on = (np.abs(_cross(O, Qj, P[None])) <= 1e-12 * np.einsum("jc,jc->j", Q - o, Q - o)[:, None]) \
+        & (t > 0) & (t < 1)
+    k = np.arange(m)
+    touches = (k[None] == i) | (k[None] == j[:, None]) | ((k[None] + 1) % m == i) \
+        | ((k[None] + 1) % m == j[:, None])
+    blocked = ((proper & ~touches).any(axis=1)) | (on & (k[None] != i) & (k[None] != j[:, None])).any(axis=1)
+    near = (j == i) | (j == (i + 1) % m) | (j == (i - 1) % m)
+    return cone & ~blocked & ~near
 
 
-def _merge(a: list, b: list, u: int, v: int) -> list:
-    """The polygon of `a` (with the edge u -> v) and `b` (with v -> u) without that edge."""
-    i, j = a.index(v), b.index(u)
-    a, b = a[i:] + a[:i], b[j:] + b[:j]  # a = [v, ..., u], b = [u, ..., v]
-    return a + b[1:-1]
+def _angle(P: np.ndarray, k: int) -> float:
+    """Interior angle (radians, in (0, 2 pi)) at corner k of the counter-clockwise polygon P."""
+    return math.pi - float(_turns(P[[(k - 1) % len(P), k, (k + 1) % len(P)]])[1])
+
+
+def _best_cut(P: np.ndarray, wide) -> tuple | None:
+    """(i, j) the diagonal that splits P best: from a corner i of more than ``LIMIT``,
+    resolving the most such ends (both pieces below ``LIMIT`` there), then with the largest smallest
+    angle at its ends in the two pieces (no slivers); ties within ``_TIE`` go to the
+    first. None where no diagonal exists (P not simple)."""
+    m = len(P)
+    best, best_key = None, None
+    for i in wide:
+        for j in np.flatnonzero(_diagonals(P, i)).tolist():
+            A = list(range(i, i + ((j - i) % m) + 1))  # i .. j
+            B = list(range(j, j + ((i - j) % m) + 1))  # j .. i
+            A, B = [k % m for k in A], [k % m for k in B]
+            ends = [_angle(P[A], 0), _angle(P[A], len(A) - 1),
+                    _angle(P[B], len(B) - 1), _angle(P[B], 0)]  # i, j in A; i, j in B
+            resolved = sum(max(ends[e], ends[e + 2]) <= LIMIT for e in (0, 1)
+                           if _angle(P, (i, j)[e]) > LIMIT)
+            key = (resolved, min(ends))
+            if best_key is None or key[0] > best_key[0] or (
+                    key[0] == best_key[0] and key[1] > best_key[1] + _TIE):
+                best, best_key = (i, j), key
+    return best
 
 
 def convex_pieces(p2: np.ndarray) -> list:
-    """Convex polygons (lists of local corner indices, counter-clockwise) covering the
-    simple polygon p2 (n, 2) with diagonals between its corners (Hertel-Mehlhorn over an
-    ear clipping: at most four times the fewest pieces); [] where p2 is not simple."""
-    pieces = [list(t) for t in _ears(p2)]
-    if not pieces:
-        return []
-    n = len(p2)
-    changed = True
-    while changed:
-        changed = False
-        edges = {}
-        for k, poly in enumerate(pieces):
-            for s, t in zip(poly, poly[1:] + poly[:1]):
-                edges[(s, t)] = k
-        for (s, t), k in edges.items():
-            if (t - s) % n in (1, n - 1):  # a side of the face, not a diagonal
-                continue
-            m = edges.get((t, s))
-            if m is None or m == k:
-                continue
-            merged = _merge(pieces[k], pieces[m], s, t)
-            turn = _turns(p2[merged])
-            if turn[0] > _STRAIGHT and turn[merged.index(s)] > _STRAIGHT:  # at t and s
-                pieces[k] = merged
-                del pieces[m]
-                changed = True
-                break
-    return pieces
+    """Pieces (lists of local corner indices, counter-clockwise) covering the simple
+    polygon p2 (n, 2), cut along diagonals between its corners until every corner of
+    every piece is below ``LIMIT``: each cut starts at a corner above it and is chosen by
+    :func:`_best_cut`; [] where p2 is not simple."""
+    todo, out = [list(range(len(p2)))], []
+    while todo:
+        poly = todo.pop()
+        P = p2[poly]
+        wide = np.flatnonzero(math.pi - _turns(P) > LIMIT).tolist()
+        if not wide:
+            out.append(poly)
+            continue
+        cut = _best_cut(P, wide)
+        if cut is None:
+            return []
+        i, j = cut
+        m = len(poly)
+        todo.append([poly[k % m] for k in range(i, i + ((j - i) % m) + 1)])
+        todo.append([poly[k % m] for k in range(j, j + ((i - j) % m) + 1)])
+    return sorted(out, key=min)
 
 
 def split_concave(x, sizes, flat, origin, notes):
