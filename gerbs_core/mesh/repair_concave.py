@@ -8,12 +8,12 @@ reversed, an L-shaped 12-gon 6, and text converted to a mesh with n-gon letters 
 area; a flat dart quad folds from a reflex angle of about 20 degrees (r = 8: 3 reversed
 triangles at 20, 57 at 90; none at 10).
 
-A face with a corner turning back by more than ``REFLEX`` (10 degrees) in the plane of
-its vector area is cut along diagonals until every corner of every piece is below
+A face of ``MIN_CORNERS`` (5) or more corners with a corner turning back by more than
+``REFLEX`` (10 degrees) in the plane of its vector area is cut along diagonals until every corner of every piece is below
 ``LIMIT`` (179 degrees: straight corners are cut too): each cut starts at such a corner
 and is the diagonal that resolves the most of them at its ends, with the largest
-smallest angle there, so a concave quad gives two triangles and an L-shaped hexagon two
-quads. (Ear clipping
+smallest angle there, so an L-shaped hexagon gives two quads. Concave quads are kept
+(``MIN_CORNERS``), and fold as before. (Ear clipping
 followed by Hertel-Mehlhorn was tried first: the star came out in eight pieces of mixed
 shapes whose seams showed as ridges on an extruded star, rendered.) No vertex is added; the pieces keep the face's
 orientation and its input index (``face_map``), and the surface is C-infinity across the
@@ -28,6 +28,11 @@ import numpy as np
 from .validation import corner_successors
 
 REFLEX = math.radians(10.0)  # a corner turning back by more than this makes a face concave
+# quads are kept: a deformation (a shape key, an armature, a drag) makes quads concave far
+# more often than a modeller draws one, and their split would change the output's topology
+# from frame to frame (two Blender tests' animated Suzanne had 11 such quads in a frame);
+# concave n-gons are drawn (text, an extruded L, a boolean's or a dissolve's caps)
+MIN_CORNERS = 5
 # the largest corner a piece keeps: straight corners are cut too (a piece whose sides
 # have collinear corners is laid out far from its shape: the L-shaped 12-gon cut in two
 # with its midpoints still folded, 1 reversed output triangle at r = 4)
@@ -46,7 +51,8 @@ def _turns(p2: np.ndarray) -> np.ndarray:
 
 def concave_faces(x, sizes, flat) -> np.ndarray:
     """(F,) bool: faces (CSR: corner counts `sizes`, vertices `flat`; positions x (V, 3))
-    with a corner turning back by more than ``REFLEX`` about their vector area's normal."""
+    of at least ``MIN_CORNERS`` corners with a corner turning back by more than ``REFLEX``
+    about their vector area's normal."""
     sizes = np.asarray(sizes, dtype=np.int64)
     F = len(sizes)
     cf = np.repeat(np.arange(F), sizes)
@@ -65,7 +71,7 @@ def concave_faces(x, sizes, flat) -> np.ndarray:
                       np.einsum("ij,ij->i", e1, e2))
     worst = np.full(F, np.inf)
     np.minimum.at(worst, cf, turn)
-    return (worst < -REFLEX) & (length > 0)
+    return (worst < -REFLEX) & (length > 0) & (sizes >= MIN_CORNERS)
 
 
 def _plane(points: np.ndarray) -> np.ndarray:
@@ -170,6 +176,8 @@ def split_concave(x, sizes, flat, origin, notes):
     """Stage 3b: replace each concave face (:func:`concave_faces`) by its convex pieces
     (:func:`convex_pieces` in the face's plane); (sizes, flat, origin) of the new faces,
     the pieces in place of their face. A face that is not simple in its plane is kept."""
+    if not len(sizes):  # every face was degenerate (refused as empty after this stage)
+        return sizes, flat, origin
     concave = concave_faces(x, sizes, flat)
     if not concave.any():
         return sizes, flat, origin
