@@ -25,8 +25,9 @@ geometric tests use the rest shape when one is given):
    possible (a boundary edge, a self-cancelling polygon) they are dropped
    (``degenerate_face``) and the surface is bounded by their neighbours.
    ``concave_face``: a face of 5 or more corners with a corner turning back by more than
-   10 degrees in its plane is split along diagonals into convex faces (:mod:`gerbs_core.mesh.repair_concave`:
-   a face is laid out as a convex polygon, and the surface folds at a reflex corner).
+   10 degrees in its plane is split along diagonals into convex faces
+   (:mod:`gerbs_core.mesh.repair_concave`: a face is laid out as a convex polygon, and the
+   surface folds at a reflex corner).
 4. ``non_manifold_edge``: an edge of 3 or more faces is split into manifold sheets
    (:mod:`gerbs_core.mesh.repair_sheets`): faces are paired by consistent orientation
    and angle, so the smoothest continuations stay glued (the plane of a T-junction is
