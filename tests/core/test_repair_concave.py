@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import example, given, settings, strategies as st
 
 from gerbs_core import BlendingSurface
-from gerbs_core.mesh.repair_concave import _turns, concave_faces, convex_pieces
+from gerbs_core.mesh.repair_concave import LIMIT, _turns, concave_faces, convex_pieces
 
 from .test_mesh_repair import _check_surface, _tags
 
@@ -87,6 +87,8 @@ def _area(p):
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.floats(0.2, 1.0), min_size=4, max_size=24), st.floats(0, 6.28))
+# (a cut once left a near-straight triangle it could not cut: the face came back whole)
+@example([1.0, 0.296875, 1, 1, 1, 1, 1, 1, 1, 1, 1, 0.65625, 1, 0.22265625, 1.0], 0.0)
 def test_convex_pieces_cover_a_star_shaped_polygon_with_convex_polygons(radii, phase):
     n = len(radii)
     t = phase + 2 * np.pi * np.arange(n) / n
@@ -96,9 +98,8 @@ def test_convex_pieces_cover_a_star_shaped_polygon_with_convex_polygons(radii, p
     for q in pieces:
         assert len(q) >= 3 and (_turns(p[q]) >= -1e-9).all()  # convex, counter-clockwise
     assert sum(_area(p[q]) for q in pieces) == pytest.approx(_area(p), rel=1e-12)
-    reflex = int((_turns(p) < 0).sum())
-    assert len(pieces) <= max(1, 4 * reflex) and len(pieces) <= n - 2
-    if reflex == 0:
+    assert len(pieces) <= max(1, n - 2)  # at most a triangulation's count
+    if not (math.pi - _turns(p) > LIMIT).any():  # every corner below 179 degrees: kept whole
         assert len(pieces) == 1
 
 
