@@ -72,6 +72,19 @@ def evaluated(obj) -> np.ndarray:
         obj_eval.to_mesh_clear()
 
 
+def undo_into_edit_mode(name: str):
+    """Undo the last pushed step, which must land in Edit Mode; (the object, found again by
+    `name`: undo replaces the Python objects, its evaluated positions there), back in
+    Object Mode."""
+    bpy.ops.ed.undo()
+    obj = bpy.data.objects[name]
+    assert obj.mode == "EDIT"
+    bpy.context.view_layer.update()
+    P = evaluated(obj)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    return obj, P
+
+
 def base_positions(obj) -> np.ndarray:
     """Positions of the mesh data-block as evaluated (reading the original mesh's
     positions from Python would un-share them and invalidate held references)."""

@@ -293,7 +293,7 @@ def test_undo_from_object_mode_back_into_edit_mode_shows_the_surface(blender):
     base mesh shown with an unchanged input now writes the result again."""
     from blender_addon import api
 
-    from .helpers import evaluated, fresh_surface, positions, topology
+    from .helpers import fresh_surface, positions, topology, undo_into_edit_mode
 
     bpy.ops.mesh.primitive_grid_add(x_subdivisions=3, y_subdivisions=3, size=2.0)
     obj = bpy.context.active_object
@@ -310,12 +310,7 @@ def test_undo_from_object_mode_back_into_edit_mode_shows_the_surface(blender):
     bpy.ops.ed.undo_push(message="moved")
     bpy.ops.object.mode_set(mode="OBJECT")
     bpy.ops.ed.undo_push(message="object")
-    bpy.ops.ed.undo()
-    obj = bpy.data.objects[name]  # undo replaces the Python objects
-    assert obj.mode == "EDIT"
-    bpy.context.view_layer.update()
-    P = evaluated(obj)
-    bpy.ops.object.mode_set(mode="OBJECT")
+    obj, P = undo_into_edit_mode(name)
     X = positions(obj.data)
     offsets, corners = topology(obj.data)
     assert len(P) > len(X) and np.abs(P - fresh_surface(X, offsets, corners, 2)).max() <= 1e-5

@@ -5,7 +5,7 @@ import bpy
 import numpy as np
 import pytest
 
-from .helpers import evaluated, make_object, positions, topology
+from .helpers import evaluated, make_object, positions, topology, undo_into_edit_mode
 
 pytestmark = pytest.mark.blender
 
@@ -152,12 +152,7 @@ def test_an_edit_mode_undo_of_a_topology_change_restores_the_earlier_binding(ble
     bpy.context.view_layer.update()
     assert len(evaluated(obj)) < len(P)  # the new topology's surface, bound anew
     bpy.ops.ed.undo_push(message="deleted")
-    bpy.ops.ed.undo()
-    obj = bpy.data.objects[name]  # undo replaces the Python objects
-    assert obj.mode == "EDIT"
-    bpy.context.view_layer.update()
-    undone = evaluated(obj)
-    bpy.ops.object.mode_set(mode="OBJECT")
+    obj, undone = undo_into_edit_mode(name)
     assert np.abs(positions(obj.data) - X2).max() <= 1e-6
     assert np.abs(undone - P).max() <= 1e-5  # bound to X again, not to X2
     assert np.abs(_surface(obj, X2, None, resolution=2) - P).max() > 1e-2  # (they differ)
