@@ -50,10 +50,12 @@ def as_float_array(t, name: str = "t") -> np.ndarray:
     return arr.astype(np.float64, copy=False)
 
 
-def check_order(nu, max_order: int, name: str = "nu", owner: str = "this kernel") -> int:
+def check_order(nu, max_order: int, name: str = "nu", owner: str = "this kernel",
+                why: str = "") -> int:
     """Validate a derivative order: an int (Python or numpy, not a bool, not a float even
     if whole) with 0 <= nu <= max_order; the one check of every ``nu`` of the package
-    (kernels, curves, surfaces, interpolators, gauges; `owner` names whose maximum)."""
+    (kernels, curves, surfaces, interpolators, gauges; `owner` names whose maximum, `why`
+    (optional) says where that maximum comes from, e.g. "(its kernel has max_order 0)")."""
     if isinstance(nu, (bool, np.bool_)) or not isinstance(nu, numbers.Integral):
         raise InvalidParameterError(name, f"derivative order must be an integer, got {nu!r}")
     nu = int(nu)
@@ -61,7 +63,8 @@ def check_order(nu, max_order: int, name: str = "nu", owner: str = "this kernel"
         raise InvalidParameterError(name, f"derivative order must be >= 0, got {nu}")
     if nu > max_order:
         raise InvalidParameterError(
-            name, f"derivative order {nu} exceeds {owner}'s max_order = {max_order}")
+            name, f"derivative order {nu} exceeds {owner}'s max_order = {max_order}"
+            + (f" {why}" if why else ""))
     return nu
 
 

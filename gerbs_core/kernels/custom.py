@@ -88,6 +88,9 @@ class CustomCDF(Kernel):
     def _params(self):
         return (self.f, self.derivatives)
 
+    def __repr__(self):
+        return f"CustomCDF({self.f!r}, {self.derivatives!r}, smoothness={self.smoothness!r})"
+
     def _interior(self, x, nmax):
         out = np.empty((nmax + 1, x.size))
         out[0] = _call(self.f, x, "f")

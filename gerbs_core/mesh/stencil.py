@@ -42,7 +42,10 @@ def _positions(X, V: int) -> np.ndarray:
     except (TypeError, ValueError):
         raise InvalidParameterError("X", f"must be a real ({V}, k) array of vertex positions, "
                                     f"got {type(X).__name__}") from None
-    if X.ndim not in (1, 2) or len(X) != V:
+    if X.ndim > 2:
+        raise InvalidParameterError("X", f"must be a ({V},) or ({V}, k) array of vertex "
+                                    f"positions, got {X.ndim} axes (shape {X.shape})")
+    if X.ndim == 0 or len(X) != V:
         raise InvalidParameterError("X", f"must have one row per input vertex: {V} rows, got "
                                     f"{len(X) if X.ndim else 0} (shape {X.shape})")
     check_finite(X, "X")

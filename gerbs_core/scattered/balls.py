@@ -21,7 +21,7 @@ from scipy.spatial import cKDTree
 from ..errors import InvalidPointSetError
 from ..inputs import radii
 from .covers import padded_ball_query
-from .radii import auto_R, nearest_distances, validate_radii
+from .radii import MARGIN, auto_R, check_extent, nearest_distances, validate_radii
 
 __all__ = ["BallCover"]
 
@@ -42,13 +42,20 @@ class BallCover:
     R, rho: None (automatic, :mod:`gerbs_core.scattered.radii`), a scalar or (N,);
     tree: the cKDTree of the points (reused for the neighbour searches).
     Attributes: ``R``, ``rho`` (N,), ``certified`` (the automatic R provably covers
-    the convex hull with psi >= b(0.9), see :func:`~gerbs_core.scattered.radii.auto_R`),
-    ``disjoint_phi`` (rho_i + rho_j <= d(x_i, x_j): (34) holds, (35) applies).
+    the convex hull by the balls of radius MARGIN R_i = 0.9 R_i, see
+    :func:`~gerbs_core.scattered.radii.auto_R`), ``max_gauge`` (every point of the hull
+    has a ball with :meth:`~.metrics.Metric.gauge` <= max_gauge, so psi >= b(max_gauge);
+    0.9 for a norm; inf without a certificate), ``disjoint_phi`` (rho_i + rho_j <=
+    d(x_i, x_j): (34) holds, (35) applies).
     """
 
     def __init__(self, points, metric, kernel, R=None, rho=None, tree=None):
         self.points, self.metric, self.kernel = points, metric, kernel
         N = points.shape[0]
+        p = getattr(metric.base, "p", 1.0)
+        if N > 1 and p > 2.8:       # (|w y|^p: a narrower range than check_points')
+            check_extent(metric.tree_coords(points), power=p,
+                         what=f" for the l_p metric with p = {p:g}")
         self.nearest = nearest_distances(points, metric, tree)
         if R is None:
             if N < 2:
@@ -57,7 +64,13 @@ class BallCover:
         else:
             self.R = radii("R", R, N)
             self.certified = False
+        self.max_gauge = (metric.certified_gauge(MARGIN, metric.base_radius(self.R))
+                          if self.certified else np.inf)
         if rho is None:
+            bad = np.flatnonzero(~(self.nearest > 0))
+            if bad.size:        # (the automatic radii: the points' fault, not rho's)
+                raise InvalidPointSetError("points: numerically coincident in the metric "
+                                           "(nearest distance 0) at indices", bad)
             self.rho = np.minimum(0.5 * self.nearest, self.R)
             self.disjoint_phi = True
         else:
@@ -99,6 +112,14 @@ class BallCover:
         width = max(int(inside.sum(axis=1).max()) if M else 0, 1)
         key = key[:, :width]
         return np.where(key == np.iinfo(np.int64).max, -1, key)
+
+    def well_inside(self, x, idx, margin=MARGIN):
+        """Rows of x (M, n) with a candidate of ``idx`` (M, K) whose gauge is <= margin:
+        inside the ball's core, where psi >= b(margin)."""
+        valid = idx >= 0
+        j = np.maximum(idx, 0)
+        t = self.metric.gauge(x[:, None, :] - self.points[j], self.R[j])
+        return (valid & (t <= margin)).any(axis=1)
 
     def jets(self, x, idx, nu, want_phi):
         """psi and (if ``want_phi``) phi jets (M, K, ...) of the candidates ``idx``."""

@@ -13,7 +13,8 @@ import numpy as np
 
 from ..errors import ResourceLimitError
 
-__all__ = ["row_bytes", "rows_per_step", "call_estimate", "check_budget", "spatial_order"]
+__all__ = ["row_bytes", "rows_per_step", "call_estimate", "byte_size", "check_budget",
+           "spatial_order"]
 
 # query rows per evaluation step at most: its ~40 temporaries of (rows, K) then stay below
 # glibc's mmap threshold (no page faults of fresh mappings) and in cache
@@ -46,13 +47,23 @@ def call_estimate(M, n, V, nu, work_bytes):
     return int(out + inputs + work_bytes)
 
 
+def byte_size(b) -> str:
+    """A byte count for messages, 3 significant digits in the largest fitting unit
+    (GB, MB, kB, bytes): a budget of 1e4 bytes reads "10 kB", not "0 MB"."""
+    b = float(b)
+    for unit, size in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if b >= size:
+            return f"{b / size:.3g} {unit}"
+    return f"{b:.0f} bytes"
+
+
 def check_budget(M, n, V, nu, work_bytes, budget):
     """Raise ResourceLimitError (naming ``memory_budget``) before allocating."""
     est = call_estimate(M, n, V, nu, work_bytes)
     if est > budget:
         raise ResourceLimitError(
-            f"{M} queries with nu={nu}: estimated memory {est / 1e6:.0f} MB exceeds the "
-            f"budget {budget / 1e6:.0f} MB (memory_budget); evaluate fewer points per call")
+            f"{M} queries with nu={nu}: estimated memory {byte_size(est)} exceeds the "
+            f"budget {byte_size(budget)} (memory_budget); evaluate fewer points per call")
     return est
 
 

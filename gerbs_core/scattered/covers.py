@@ -19,10 +19,10 @@ Cover constructors:
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import Delaunay, QhullError
 
 from ..errors import InvalidParameterError, InvalidPointSetError
 from .planar_star import PlanarStarCover, cross2d, signed_angle
+from .triangulation import delaunay
 
 __all__ = ["PlanarStarCover", "delaunay_cover", "voronoi_cover", "polygon_cover", "padded_ball_query"]
 
@@ -62,21 +62,16 @@ def padded_ball_query(tree, x, r, p=2.0, k0=16):
 
 
 def delaunay_triangulation(points):
-    """scipy Delaunay with CCW simplices; raise InvalidPointSetError for degenerate sets."""
+    """The Delaunay triangulation (a :class:`~gerbs_core.scattered.triangulation.Triangulation`,
+    Qhull on normalised coordinates) and its simplices (T, 3) and neighbours (T, 3), made
+    counter-clockwise; raise InvalidPointSetError for degenerate sets."""
     if points.shape[1] != 2:
         raise InvalidParameterError("cover", "star covers are planar: points must have n = 2")
     if points.shape[0] < 3:
         raise InvalidPointSetError(f"points: a Delaunay cover needs >= 3 points, got {points.shape[0]}")
-    try:
-        tri = Delaunay(points)
-    except QhullError as exc:
-        raise InvalidPointSetError(
-            "points: degenerate (collinear) point set, no Delaunay triangulation: "
-            + str(exc).splitlines()[0], np.arange(points.shape[0])) from None
-    if len(tri.coplanar):
-        raise InvalidPointSetError("points: Qhull dropped these points (numerically coincident)",
-                                   tri.coplanar[:, 0])
-    _set_transforms(tri, points)
+    tri = delaunay(points)
+    _set_transforms(tri.qhull, tri.qhull.points)     # (find_simplex's, normalised)
+    tri.transform          # (the caller's coordinates too, from them: the same bits near 0)
     s = tri.simplices.copy()
     nb = tri.neighbors.copy()
     P = points[s]
@@ -151,7 +146,9 @@ def delaunay_cover(points, kernel, **gauge_kw):
     # the edges' end points gathered coordinate-major: (E, 2) views with contiguous columns
     pts_t = np.ascontiguousarray(points.T)
     q0, q1 = pts_t.take(i0, axis=1).T, pts_t.take(i1, axis=1).T
-    cover = PlanarStarCover(points, star, q0, q1, nxt, prv, kernel, **gauge_kw)
+    # in a triangle some vertex has barycentric coordinate >= 1/3: exact gauge <= 2/3
+    cover = PlanarStarCover(points, star, q0, q1, nxt, prv, kernel, domain_gauge=2.0 / 3.0,
+                            **gauge_kw)
     return cover, tri, s
 
 
@@ -230,7 +227,8 @@ def voronoi_cells(points, domain):
             b = a @ (0.5 * (points[i] + points[j]))
             cell = _clip(cell, a, b)
         # drop (near-)repeated vertices created by clipping
-        keep = np.linalg.norm(cell - np.roll(cell, 1, axis=0), axis=1) > 1e-12 * (1 + np.abs(cell).max())
+        # (relative to the coordinates' size: points of any scale, module triangulation)
+        keep = np.linalg.norm(cell - np.roll(cell, 1, axis=0), axis=1) > 1e-12 * np.abs(cell).max()
         cells.append(cell[keep])
     return cells
 
@@ -262,7 +260,8 @@ def voronoi_cover(points, kernel, domain=None, scale=2.0, **gauge_kw):
     domain = _as_domain(domain, points)
     cells = voronoi_cells(points, domain)
     rings = [points[i] + scale * (c - points[i]) for i, c in enumerate(cells)]
-    return _rings_cover(points, rings, kernel, **gauge_kw), domain
+    # a domain point lies in its own cell: exact gauge of the enlarged cell <= 1 / scale
+    return _rings_cover(points, rings, kernel, domain_gauge=1.0 / scale, **gauge_kw), domain
 
 
 def in_convex_polygon(x, poly):

@@ -12,12 +12,12 @@ and a regular grid inside the domain polygon for the Voronoi cover.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import Delaunay
 
 from ..errors import InvalidParameterError
 from ..inputs import integer, real_array
 
 from .covers import in_convex_polygon
+from .triangulation import simplicialization
 
 __all__ = ["sample_domain", "cover_report"]
 
@@ -41,7 +41,10 @@ def sample_domain(interp, resolution=6, seed=0):
         x = np.sort(pts[:, 0])
         t = np.linspace(0, 1, resolution + 1)
         return (x[:-1, None] + np.diff(x)[:, None] * t).reshape(-1, 1)
-    simp = interp.simplices if hasattr(interp, "simplices") else Delaunay(pts).simplices
+    simp = interp.simplices if hasattr(interp, "simplices") else simplicialization(pts)
+    if simp is None:
+        raise InvalidParameterError("samples", "Qhull finds the points degenerate: no simplices "
+                                    "to sample the domain in; pass samples")
     if n == 2:
         lam = _lattice(resolution)
     else:

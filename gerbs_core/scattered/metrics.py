@@ -68,6 +68,12 @@ class Metric:
             raise InvalidParameterError("n", f"dimension must be >= 1, got {n}")
         self.n = int(n)
 
+    def __repr__(self):
+        p = f", p={self.p:g}" if hasattr(self, "p") else ""
+        w = getattr(self, "w", None)
+        w = "" if w is None or np.all(w == 1.0) else f", weights={w.tolist()}"
+        return f"{type(self).__name__}(n={self.n}{p}{w})"
+
     def _check(self, y):
         y = np.asarray(y, dtype=float)
         if y.shape[-1] != self.n:
@@ -103,6 +109,17 @@ class Metric:
 
     def tree_coords(self, x):
         return np.asarray(x, float) * self.w
+
+    def gauge(self, y, R):
+        """The bump's argument t at offsets y (..., n) for radii R (broadcast against the
+        leading axes): bump = b(t) for the radial bumps, >= b(t)^m for the tensor bumps
+        (41) (m factors, each >= b(t)); t < 1 exactly in the ball."""
+        return self.norm(y) / np.asarray(R, float)
+
+    def certified_gauge(self, margin, Rb):
+        """The largest :meth:`gauge` of a point within base distance margin * Rb of a
+        centre (base radii Rb (N,)): ``margin`` for a norm."""
+        return float(margin)
 
     # support geometry, used by the ball search and the cover certificate
     convex = True          # balls are convex (a norm): a simplex lies in the ball of its vertices
@@ -331,6 +348,9 @@ class Bounded(Metric):
     def base(self):
         return self._base
 
+    def __repr__(self):
+        return f"Bounded({self._base!r})"
+
     def base_radius(self, R):
         R = self._radius(R)
         return R / (1.0 - R)
@@ -375,6 +395,19 @@ class Bounded(Metric):
     def coord_bound(self, R):
         R = self._radius(R)
         return self.base.coord_bound(R / (1.0 - R))
+
+    def gauge(self, y, R):
+        if isinstance(self.base, _Tensor):       # (the base's tensor bump, bump_jet)
+            return self.base.gauge(y, self.base_radius(R))
+        return self.norm(y) / np.asarray(R, float)
+
+    def certified_gauge(self, margin, Rb):
+        """dt/R for d <= margin Rb: up to margin (1 + Rb) / (1 + margin Rb), which tends
+        to 1 for large base radii (the bounded metric is not scale invariant)."""
+        if isinstance(self.base, _Tensor):
+            return float(margin)
+        Rb = np.asarray(Rb, float)
+        return float(np.max(margin * (1.0 + Rb) / (1.0 + margin * Rb), initial=margin))
 
     def tree_coords(self, x):
         return self.base.tree_coords(x)

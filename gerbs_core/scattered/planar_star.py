@@ -73,14 +73,25 @@ class PlanarStarCover:
     next_edge, prev_edge : (E,) int, neighbouring edge of the same star (-1 at the
         ends of an open star).
     kernel : the GERBS kernel (b and the envelope spline).
+    domain_gauge : a bound of the polygons' exact gauge over the cover's domain (every
+        point of it lies in some polygon scaled by domain_gauge about its centre: 2/3 for
+        Delaunay stars in their hull, 1/2 for the doubled Voronoi cells in their domain),
+        or None (user polygons: no domain known).
+
+    ``max_gauge``: every domain point has some g~_i <= max_gauge = domain_gauge /
+    (kappa shrink) (domain_gauge / shrink if ``exact``), so psi_i >= b(max_gauge); inf
+    without ``domain_gauge``. ``support_radius`` (N,): supp psi_i lies in the disc of that
+    radius about x_i; ``min_radius`` (N,): rho~_i >= min_radius_i in every direction.
     """
 
     def __init__(self, centers, edge_star, q0, q1, next_edge, prev_edge, kernel,
-                 kappa=0.8, shrink=0.95, exact=False):
+                 kappa=0.8, shrink=0.95, exact=False, domain_gauge=None):
         if not (0 < kappa < 1):
             raise InvalidParameterError("kappa", f"need 0 < kappa < 1, got {kappa}")
         if not (0 < shrink <= 1):
             raise InvalidParameterError("shrink", f"need 0 < shrink <= 1, got {shrink}")
+        inner = shrink if exact else kappa * shrink          # rho~ >= inner * rho
+        self.max_gauge = np.inf if domain_gauge is None else float(domain_gauge) / inner
         self.centers = centers
         self._centers_t = np.ascontiguousarray(centers.T)     # (psi_jet's gathers)
         self.kernel = kernel

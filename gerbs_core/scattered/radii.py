@@ -29,16 +29,23 @@ Nearest-neighbour searches use one scipy.spatial.cKDTree of the points per fit
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree, Delaunay
-from scipy.spatial import QhullError
+from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError, InvalidPointSetError
 from ..inputs import real_array
 from .cover_check import certify_cover
 from .metrics import QuasiNorm
+from .triangulation import simplicialization as delaunay_simplices
 
-__all__ = ["check_points", "nearest_distances", "auto_rho", "auto_R", "validate_radii",
-           "simplicialization"]
+__all__ = ["check_points", "check_extent", "nearest_distances", "auto_rho", "auto_R",
+           "validate_radii", "simplicialization", "EXTENT_RANGE", "MARGIN"]
+
+# the extents of point sets the interpolator handles: its Taylor coefficients of degree 3
+# scale like extent^-3 and its squared distances like extent^2 (double precision:
+# 1e-308 .. 1e308, with room for the data's own scale)
+EXTENT_RANGE = (1e-100, 1e100)
+# the certified automatic ball radii R_i cover the hull by the balls of radius MARGIN R_i
+MARGIN = 0.9
 
 
 def check_points(points, name="points", min_points=1, return_tree=False):
@@ -59,11 +66,29 @@ def check_points(points, name="points", min_points=1, return_tree=False):
         dup = _duplicates(p)
         if dup.size:
             raise InvalidPointSetError(f"{name}: duplicate points at indices", dup)
+        check_extent(p, name)
     if not return_tree:
         return p
     # sliding-midpoint splits, boxes not shrunk to the points: built in half the time,
     # the same neighbours (every query is exact); k-NN queries as fast (10^5 points)
     return p, (cKDTree(p, balanced_tree=False, compact_nodes=False) if p.shape[0] > 1 else None)
+
+
+def check_extent(points, name="points", power=1.0, what=""):
+    """Refuse points (N, n), N >= 2, whose extent (the longest side of their bounding box) is
+    outside :data:`EXTENT_RANGE` (InvalidPointSetError naming ``name`` and the range); for a
+    metric raising coordinates to a power p > 2.8 (l_p) the range narrows to
+    [10^(-280/p), 10^(280/p)] (``what`` says which metric). The position of the box does
+    not matter (the Delaunay triangulation is computed on centred coordinates)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        ext = float(np.max(np.ptp(points, axis=0)))
+    e = min(np.log10(EXTENT_RANGE[1]), 280.0 / power)
+    lo, hi = max(10.0 ** -e, EXTENT_RANGE[0]), 10.0 ** e
+    if not lo <= ext <= hi:
+        raise InvalidPointSetError(
+            f"{name}: the extent of the points (the longest side of their bounding box) is "
+            f"{ext:.3g}, outside the supported range [{lo:.3g}, {hi:.3g}]{what}; rescale the "
+            f"coordinates (and any derivative data) to a moderate range")
 
 
 def _duplicates(p):
@@ -134,17 +159,15 @@ def auto_rho(points, metric, fraction=0.5, tree=None):
 
 def simplicialization(points):
     """Simplices (T, n+1) int covering the convex hull: sorted intervals for n = 1,
-    Qhull's Delaunay for 2 <= n <= 6; None when Qhull fails or n > 6."""
+    Qhull's Delaunay for 2 <= n <= 6 (on normalised coordinates,
+    :mod:`~gerbs_core.scattered.triangulation`); None when Qhull fails or n > 6."""
     n_pts, n = points.shape
     if n == 1:
         order = np.argsort(points[:, 0])
         return np.stack([order[:-1], order[1:]], axis=1)
     if n > 6 or n_pts < n + 1:
         return None
-    try:
-        return Delaunay(points).simplices
-    except QhullError:
-        return None
+    return delaunay_simplices(points)
 
 
 def _local_spacing(points, base, tree, k):
@@ -154,7 +177,7 @@ def _local_spacing(points, base, tree, k):
     return base.norm(points[idx] - points[:, None, :]).max(axis=1)
 
 
-def auto_R(points, metric, margin=0.9, factor=2.0, tree=None, simplices="auto"):
+def auto_R(points, metric, margin=MARGIN, factor=2.0, tree=None, simplices="auto"):
     """Size radii R_i (see module doc). Returns (R (N,), certified: bool).
 
     ``tree``: cKDTree of ``points`` to reuse; ``simplices``: (T, n+1) simplices of the

@@ -38,12 +38,14 @@ shrink)) > 0 when kappa shrink > n/(n+1) (the default kappa is chosen so).
 """
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
-from scipy.spatial import Delaunay, QhullError
 
 from ..errors import InvalidParameterError, InvalidPointSetError
 from ..gauge.jet import bump_derivs, chain_jet
 from .partition import jmul, jsum, normalize
+from .triangulation import delaunay
 
 __all__ = ["DelaunayStarCover", "default_kappa"]
 
@@ -58,16 +60,7 @@ def _delaunay(points):
     N, n = points.shape
     if N < n + 1:
         raise InvalidPointSetError(f"points: a Delaunay cover in R^{n} needs >= {n + 1} points, got {N}")
-    try:
-        tri = Delaunay(points)
-    except QhullError as exc:
-        raise InvalidPointSetError(
-            "points: degenerate point set (in a hyperplane), no Delaunay simplicialization: "
-            + str(exc).splitlines()[0], np.arange(N)) from None
-    if len(tri.coplanar):
-        raise InvalidPointSetError("points: Qhull dropped these points (numerically coincident)",
-                                   tri.coplanar[:, 0])
-    return tri
+    return delaunay(points)
 
 
 def _barycentric_gradients(points, S):
@@ -100,12 +93,15 @@ def _jet_ratio(A, B, GA, GB):
 class DelaunayStarCover:
     """Smooth star gauges of the Delaunay stars of points (N, n), n >= 2 (see module doc).
 
-    Attributes: ``tri`` (scipy Delaunay), ``simplices`` (T, n+1), ``G`` (T, n+1, n) the
+    Attributes: ``tri`` (:class:`~.triangulation.Triangulation`, Qhull's on normalised
+    coordinates, answering in the caller's), ``simplices`` (T, n+1), ``G`` (T, n+1, n) the
     barycentric gradients, ``delta`` and ``scale`` c per corner (T*(n+1),) (corner
     t (n+1) + k: vertex k of simplex t), ``star_ptr``/``star_corners`` the corners of
     each star (CSR), ``lipschitz`` (N,) the exact gauge's Lipschitz constant per star
     (1 / the smallest facet distance), ``min_radius`` (N,) a lower bound of rho~ per
-    star, ``kappa``, ``shrink``.
+    star, ``support_radius`` (N,) an upper bound of the support's radius, ``max_gauge``
+    (every point of the hull has some g~_v <= max_gauge = n / ((n+1) kappa shrink)),
+    ``kappa``, ``shrink``.
     """
 
     def __init__(self, points, kernel, kappa=None, shrink=0.95, exact=False, tri=None, tree=None):
@@ -126,6 +122,22 @@ class DelaunayStarCover:
         S = self.simplices = self.tri.simplices
         self.G = _barycentric_gradients(points, S)
         self._corners()
+        # thickness: in a simplex some g_v <= n/(n+1), and g~ <= g / (kappa shrink)
+        inner = self.shrink if self.exact else self.kappa * self.shrink
+        self.max_gauge = n / ((n + 1.0) * inner)
+
+    @cached_property
+    def support_radius(self) -> np.ndarray:
+        """(N,) supp psi_v lies in the ball of this radius about v: shrink times the
+        farthest vertex of v's star (g~ >= g / shrink, and the star is the set g < 1)."""
+        S, P = self.simplices, self.points
+        out = np.zeros(len(P))
+        for a in range(self.n + 1):
+            for b in range(a + 1, self.n + 1):
+                d = np.linalg.norm(P[S[:, a]] - P[S[:, b]], axis=1)
+                np.maximum.at(out, S[:, a], d)
+                np.maximum.at(out, S[:, b], d)
+        return self.shrink * out
 
     def _corners(self):
         """Per-star corner lists (CSR), the certified delta and c of every corner, and a

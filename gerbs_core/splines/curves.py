@@ -85,6 +85,14 @@ def _check_kernels(kernel, n_intervals: int):
     return tuple(out), None
 
 
+def _kernel_repr(basis) -> str:
+    """The kernel part of a repr: the common kernel, or a count of per-interval ones."""
+    if basis._kernel is not None:
+        return repr(basis._kernel)
+    kinds = sorted({type(k).__name__ for k in basis._kernels})
+    return f"<{len(basis._kernels)} per interval: {', '.join(kinds)}>"
+
+
 class GERBSBasis(Immutable):
     """The GERBS basis G_1..G_n of eq. (3) on knots t_0 < ... < t_{n+1}.
 
@@ -128,7 +136,13 @@ class GERBSBasis(Immutable):
 
     @property
     def max_order(self) -> int:
+        """Highest derivative order available: the smallest of the kernels' max_order."""
         return min(k.max_order for k in self._kernels)
+
+    def __repr__(self) -> str:
+        k = self._knots
+        return (f"GERBSBasis(n={self.n}, knots=[{k[0]:g} .. {k[-1]:g}], "
+                f"kernel={_kernel_repr(self)})")
 
     def support(self, j: int) -> tuple:
         """[t_{j-1}, t_{j+1}] for column j (0-based: G_{j+1}), as a tuple."""
@@ -144,7 +158,7 @@ class GERBSBasis(Immutable):
         (:func:`~gerbs_core.splines.evaluate.rising_jet`; 0 outside [t_0, t_{n+1}]).
         NaN t gives NaN.
         """
-        nmax = check_order(nmax, self.max_order, name="nu")
+        nmax = check_order(nmax, self.max_order, name="nmax", owner="this basis")
         t = as_float_array(t).ravel()
         k = knot_interval(self._knots, t, side="left")
         nan = np.isnan(t)
@@ -179,6 +193,7 @@ class GERBSBasis(Immutable):
 
     def __call__(self, t, nu: int = 0) -> np.ndarray:
         """G_j^(nu)(t) for all j: array (*t.shape, n)."""
+        nu = check_order(nu, self.max_order, owner="this basis")
         t = as_float_array(t)
         k, fall, rise = self.active(t, nu)
         P = k.size
@@ -207,10 +222,17 @@ class GERBSCurve(Immutable):
 
     ``curve(t, nu=0)`` -> (*t.shape, d): c^(nu)(t) by the Leibniz rule
     c^(nu) = sum_j sum_i binom(nu, i) G_j^(i) l_j^(nu - i) (exact given the
-    kernel). Hermite property: c^(i)(t_j) = local_curves[j, i] for every
-    i <= m whenever F^(r)(0) = F^(r)(1) = 0 for 1 <= r <= i (all orders for
-    ERBS and LogisticStep; r <= min(i_left, i_right) for BFBS; none for
-    Affine and Step, which reproduce values only).
+    kernel); ``nu`` <= :attr:`max_order`.
+
+    Hermite property: evaluated AT a knot t_j, c^(i)(t_j) is the datum
+    local_curves[j, i] (0 for i > m) for every kernel and every i, because the
+    kernels report F^(r) = 0 at t = 0 and t = 1 (their value from outside), so only
+    l_j contributes there. It is the derivative of the curve (both one-sided limits
+    agree with it) when F^(r)(0) = F^(r)(1) = 0 for 1 <= r <= i: all orders for
+    ERBS, LogisticStep and Step(at > 0); r <= min(i_left, i_right) for BFBS; none
+    for Affine (i = 0 only). Beyond that order c^(i) jumps at t_j and the datum
+    returned there is neither one-sided limit (e.g. Affine, i = 1: the datum -0.54
+    between the limits -0.66 and 4.4); Step(0) jumps already in value, to the right.
     """
 
     def __init__(self, knots, local_curves, kernel: Kernel | Sequence[Kernel] | None = None,
@@ -252,9 +274,29 @@ class GERBSCurve(Immutable):
     def dim(self) -> int:
         return self._L.shape[2]
 
+    @property
+    def max_order(self) -> int:
+        """Highest derivative order of this curve: the kernels' max_order, less the orders
+        a :meth:`derivative` curve has already taken."""
+        return self._basis.max_order - self._nu0
+
+    def _check_nu(self, nu) -> int:
+        why = ""
+        if self._nu0:
+            why = (f"(it is derivative({self._nu0}) of a curve of max_order "
+                   f"{self._basis.max_order}: the derivative has used those orders)")
+        return check_order(nu, self.max_order, owner="this curve", why=why)
+
+    def __repr__(self) -> str:
+        k = self._basis.knots
+        d = f", derivative={self._nu0}" if self._nu0 else ""
+        return (f"GERBSCurve(n={self._basis.n}, d={self.dim}, m={self._L.shape[1] - 1}, "
+                f"knots=[{k[0]:g} .. {k[-1]:g}], "
+                f"kernel={_kernel_repr(self._basis)}{d})")
+
     def derivative(self, nu: int = 1) -> "GERBSCurve":
         """The curve t -> c^(nu)(t), as an object with the same interface."""
-        nu = check_order(nu, self._basis.max_order - self._nu0)
+        nu = self._check_nu(nu)
         out = GERBSCurve.__new__(GERBSCurve)
         out.__dict__.update(_basis=self._basis, _L=self._L, _nu0=self._nu0 + nu)
         out._freeze()
@@ -285,8 +327,7 @@ class GERBSCurve(Immutable):
 
     def __call__(self, t, nu: int = 0) -> np.ndarray:
         """c^(nu)(t): array (*t.shape, d)."""
-        nu = check_order(nu, self._basis.max_order - self._nu0)
-        nu += self._nu0
+        nu = self._check_nu(nu) + self._nu0
         t = as_float_array(t)
         k, rise = self._basis.rising(t, nu)
         tf = t.ravel()

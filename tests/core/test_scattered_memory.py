@@ -30,7 +30,8 @@ def test_refused_before_allocating_with_the_estimate():
     X = RNG.random((2_000_000, 3)) * 0.5 + 0.25          # output alone: 16 MB + ordering
     with pytest.raises(ResourceLimitError, match="memory_budget") as info:
         _, peak = _peak(lambda: interp(X))
-    est = float(re.search(r"estimated memory (\d+) MB", str(info.value)).group(1)) * 1e6
+    num, unit = re.search(r"estimated memory ([\d.]+) (GB|MB|kB)", str(info.value)).groups()
+    est = float(num) * {"GB": 1e9, "MB": 1e6, "kB": 1e3}[unit]
     assert est > 20e6
     tracemalloc.start()
     try:
