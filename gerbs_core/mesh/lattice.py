@@ -212,6 +212,10 @@ class Lattice:
         self.topology, self.resolution = tp, r
         self.n_points, self.n_triangles = P, T
 
+    def __repr__(self) -> str:
+        return (f"Lattice(resolution={self.resolution}, n_points={self.n_points}, "
+                f"n_triangles={self.n_triangles}, faces={self.topology.n_faces})")
+
     @cached_property
     def triangles(self) -> np.ndarray:
         """(T, 3) the output triangles (made on first use: 24 bytes a triangle, which a

@@ -86,6 +86,11 @@ class Stencil(Immutable):
     def shape(self) -> tuple[int, int]:
         return self.base.shape
 
+    def __repr__(self) -> str:
+        P, V = self.shape
+        return (f"Stencil(points={P}, vertices={V}, resolution={self.lattice.resolution}, "
+                f"nnz_per_row={self.nnz_per_row():.1f})")
+
     @property
     def nnz(self) -> int:
         """Stored entries of the three factors."""

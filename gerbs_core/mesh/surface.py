@@ -250,6 +250,11 @@ class BlendingSurface(Immutable):
     def boundary(self) -> str:
         return self.model.boundary
 
+    def __repr__(self) -> str:
+        T = self.topology
+        return (f"BlendingSurface(vertices={T.n_vertices}, faces={T.n_faces}, "
+                f"kernel={self.kernel!r}, boundary={self.boundary!r})")
+
     @property
     def vertices(self) -> np.ndarray:
         """(V', 3) positions of the repaired mesh's vertices (= input[vertex_map])."""

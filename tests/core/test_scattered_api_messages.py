@@ -121,3 +121,17 @@ def test_reprs_are_short_and_informative():
     assert repr(Ib).startswith("GERBSInterpolator(N=40, n=2, values=(), cover='balls', "
                                "metric=Lp(n=2, p=3), basis='general'")
     assert str(I) == repr(I)
+
+
+def test_the_mesh_objects_have_reprs_too():
+    """(Were ``<... object at 0x...>``.)"""
+    from gerbs_core import BlendingSurface
+    from gerbs_core.datasets.primitives import icosphere
+
+    V, F = icosphere(1)
+    S = BlendingSurface(V, F)
+    assert repr(S) == (f"BlendingSurface(vertices=42, faces=80, kernel={ERBS()!r}, "
+                       f"boundary='keep')")
+    st = S.stencil(2)
+    assert repr(st).startswith("Stencil(points=162, vertices=42, resolution=2, nnz_per_row=")
+    assert repr(S.lattice(2)) == "Lattice(resolution=2, n_points=162, n_triangles=320, faces=80)"
