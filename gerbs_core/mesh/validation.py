@@ -32,8 +32,12 @@ OUTLIER_FACTOR = 1e6
 CHAIN_RTOL = 1e-12
 
 
-def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12) -> None:
+def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12,
+                      laid_out: bool = True) -> None:
     """Check vertex positions (V, d), d = 2 or 3, against ``topology``; return None or raise.
+    `laid_out`: the faces' layouts come from these positions (False: the current positions
+    of a surface bound to another rest shape, which it only moves linearly), so faces whose
+    edge lengths admit no convex polygon are degenerate too (:func:`flat_faces`).
 
     Tags in the module docstring. ``zero_length_edge``: |x_a - x_b| <= rtol * median edge
     length (element vertex, the end points, ``err.edges`` the pairs);
@@ -70,7 +74,7 @@ def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12) -> 
     if short.any():
         raise edge_error("zero_length_edge", f"have length <= {rtol:g} * the median edge length",
                           e[short], topology.edge_faces[short][topology.edge_faces[short] >= 0])
-    flat = flat_faces(x, topology.face_sizes, topology.face_vertices, rtol)
+    flat = flat_faces(x, topology.face_sizes, topology.face_vertices, rtol, laid_out)
     if flat.any():
         raise InvalidMeshError("degenerate_face", "degenerate_face: zero area (collinear "
                                "corners) in faces", np.flatnonzero(flat), "face")
@@ -125,10 +129,11 @@ def chain_faces(x, sizes, flat) -> np.ndarray:
     return not_a_polygon(longest, total)
 
 
-def flat_faces(x, sizes, flat, rtol: float = 1e-12) -> np.ndarray:
+def flat_faces(x, sizes, flat, rtol: float = 1e-12, laid_out: bool = True) -> np.ndarray:
     """(F,) bool: faces (CSR: corner counts ``sizes`` (F,), vertices ``flat`` (C,)) of zero
-    area, |vector area| <= rtol * (longest edge of the face)**2, or whose edge lengths
-    admit no convex polygon (:func:`chain_faces`); positions x (V, 3).
+    area, |vector area| <= rtol * (longest edge of the face)**2, or, where x is the shape
+    the faces are laid out from (`laid_out`), whose edge lengths admit no convex polygon
+    (:func:`not_a_polygon`); positions x (V, 3).
 
     The vector area sum_k x_k x x_{k+1} / 2 is taken relative to the face's first corner
     (no cancellation), so it vanishes exactly for collinear corners and for
@@ -146,6 +151,12 @@ def flat_faces(x, sizes, flat, rtol: float = 1e-12) -> np.ndarray:
     p, q = x[flat] - base, x[flat[nxt]] - base
     varea = np.zeros((F, 3))
     np.add.at(varea, cf, np.cross(p, q))  # twice the vector area
+    length = np.linalg.norm(q - p, axis=1)
     longest = np.zeros(F)
-    np.maximum.at(longest, cf, np.linalg.norm(q - p, axis=1))
-    return (0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2) | chain_faces(x, sizes, flat)
+    np.maximum.at(longest, cf, length)
+    zero = 0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2
+    if not laid_out:
+        return zero
+    total = np.zeros(F)
+    np.add.at(total, cf, length)
+    return zero | not_a_polygon(longest, total)

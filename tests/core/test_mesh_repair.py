@@ -382,3 +382,23 @@ def test_repair_never_modifies_its_input_and_is_the_identity_on_valid_meshes():
     from gerbs_core.mesh import MeshTopology
     T = MeshTopology(arr, len(V))
     assert repair_mesh(V, T).topology is T
+
+
+def test_a_bound_surface_may_be_squashed_nearly_flat():
+    """Found by a review: since faces whose edge lengths admit no convex polygon count as
+    degenerate (for the layout), the current positions of a surface bound to another rest
+    shape were checked that way too, and a triangle patch squashed in y by 1e-6 was
+    refused; they are only moved linearly. Exactly flat current faces are still refused."""
+    n = 4
+    R = np.array([(i + 0.5 * j, j * np.sqrt(3) / 2, 0.0) for j in range(n) for i in range(n)])
+    F = []
+    for j in range(n - 1):
+        for i in range(n - 1):
+            a, b, c, d = j * n + i, j * n + i + 1, (j + 1) * n + i, (j + 1) * n + i + 1
+            F += [(a, b, c), (b, d, c)]
+    for squash in (1e-6, 1e-9):
+        X = R * [1, squash, 1]
+        P = BlendingSurface(X, F, rest_positions=R).tessellate(2)[0]
+        assert np.isfinite(P).all() and np.abs(P[:len(X)] - X).max() <= 1e-12
+    with pytest.raises(InvalidMeshError, match="degenerate_face"):
+        BlendingSurface(R * [1, 0, 1], F, rest_positions=R)
