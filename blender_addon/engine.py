@@ -426,13 +426,15 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
     prev = _states.get(key)
     previous = prev.transfer if prev is not None and prev.result_uid == st.result_uid else None
     st.transfer = write_geometry(res.data, built, previous, inp)
-    rest_mod.write(res.data, st.rest if settings["rest"] == "bound" else None)  # kept with it
-    rest_mod.remember(bindings, key[:2], inp, st.rest if settings["rest"] == "bound" else None)
     misfit = snapshot.misfit(res.data, inp)
-    if misfit:  # the record of the input must fit on the output
+    if misfit:  # the record of the input (and a rest shape) must fit on the output
         return _fail(obj, mod, key, st, (
             f"{PREFIX}resolution {resolution} gives fewer output {misfit} than the mesh has "
             f"(loose or merged ones); raise the resolution"), progress, render=render)
+    # checked first (a review: a Bound mesh with loose vertices at resolution 1 failed
+    # with a raw ValueError writing its rest shape on fewer output points)
+    rest_mod.write(res.data, st.rest if settings["rest"] == "bound" else None)  # kept with it
+    rest_mod.remember(bindings, key[:2], inp, st.rest if settings["rest"] == "bound" else None)
     st.stencil, st.points, st.warnings = built.stencil, P, built.surface.warnings
     st.points32 = P32  # what write_geometry wrote
     # logged when they change, not at every rebuild (a Follow drag rebuilds at each pause:

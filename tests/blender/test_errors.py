@@ -221,3 +221,25 @@ def test_a_repair_is_logged_once_not_at_every_rebuild(blender, caplog):
     said = [r for r in caplog.records if "unused" in r.getMessage() or "loose" in r.getMessage()]
     assert len(said) == 1, [r.getMessage() for r in caplog.records]
     assert "warning" in api.status(obj) and api.status(obj)["warning"]
+
+
+@pytest.mark.parametrize("rest", ["follow", "bound"])
+def test_more_loose_vertices_than_output_points_is_an_error_in_both_rest_modes(blender, rest):
+    """A grid at resolution 1 with a loose vertex: the output has fewer points than the
+    mesh has vertices. Found by a review: with Rest Shape Bound the rest shape was written
+    first, and the sync failed with a raw ValueError ("internal error")."""
+    from blender_addon import api
+    from blender_addon.api import GERBSSyncError
+
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=3, y_subdivisions=3, size=2.0)
+    obj = bpy.context.active_object
+    obj.data.vertices.add(1)
+    obj.data.vertices[-1].co = (3.0, 0.0, 0.0)
+    obj.data.update()
+    X = positions(obj.data)
+    with pytest.raises(GERBSSyncError, match="resolution 1 gives fewer output points"):
+        api.add_surface(obj, resolution=1, rest=rest)
+    assert "internal error" not in api.status(obj)["error"]
+    assert np.array_equal(evaluated(obj), X) and np.array_equal(positions(obj.data), X)
+    api.set_settings(obj, resolution=2)  # enough points: the surface, no error
+    assert len(evaluated(obj)) > len(X) and api.status(obj)["error"] == ""
