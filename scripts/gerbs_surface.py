@@ -265,26 +265,36 @@ def import_mesh(bpy, path: Path):
     return [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
 
 
-_NON_FINITE = re.compile(rb"nan|inf", re.IGNORECASE)
+# a vertex line with a word that may not be a finite single-precision number: nan, inf,
+# or an exponent of 38 or more (a review: "1e39" and "1e999" also read as 0)
+_SUSPECT = re.compile(rb"(?im)^[ \t]*v[ \t][^\n]*?(nan|inf|e\+?0*(3[89]|[4-9]\d|\d{3,}))")
+_FLOAT32_MAX = 3.4028234663852886e38
 
 
 def check_obj_numbers(path: Path) -> None:
-    """Refuse an OBJ whose vertex lines hold a NaN or infinite coordinate: Blender's OBJ
-    importer reads them as 0 (found by a test with messy meshes: a dented surface, exit
-    0, no word). A regular expression over the bytes first: most files have neither."""
+    """Refuse an OBJ whose vertex lines hold a coordinate that is not a finite single-
+    precision number (NaN, infinite, beyond 3.4e38): Blender's OBJ importer reads them as 0
+    (found by a test with messy meshes: a dented surface, exit 0, no word). A regular
+    expression over the vertex lines first: most files have none."""
     data = path.read_bytes()
-    if not _NON_FINITE.search(data):
+    if not _SUSPECT.search(data):
         return
     bad = []
     for number, line in enumerate(data.splitlines(), 1):
         words = line.split()
-        if words[:1] == [b"v"] and _NON_FINITE.search(b" ".join(words[1:4])):
+        if words[:1] != [b"v"]:
+            continue
+        try:
+            xyz = [float(w) for w in words[1:4]]
+        except ValueError:
+            continue  # the importer's to judge
+        if not all(abs(c) <= _FLOAT32_MAX for c in xyz):  # (False for NaN too)
             bad.append(number)
     if bad:
         lines = ", ".join(map(str, bad[:5])) + (" ..." if len(bad) > 5 else "")
-        raise UserError(f"{path.name}: NaN or infinite vertex coordinates on line(s) {lines} "
-                        f"({len(bad)} vertices): Blender's OBJ importer would read them as 0; "
-                        f"fix those vertices")
+        raise UserError(f"{path.name}: NaN, infinite or out-of-range (beyond 3.4e38) vertex "
+                        f"coordinates on line(s) {lines} ({len(bad)} vertices): Blender's OBJ "
+                        f"importer would read them as 0; fix those vertices")
 
 
 def obj_rounding(bpy, objects) -> str:
@@ -297,6 +307,8 @@ def obj_rounding(bpy, objects) -> str:
     for obj in objects:
         mesh = obj.evaluated_get(depsgraph).data
         P = _get(mesh.vertices, "co", len(mesh.vertices), np.float32, 3).astype(np.float64)
+        M = np.array(obj.matrix_world)  # the exporter writes world coordinates (a review:
+        P = P @ M[:3, :3].T + M[:3, 3]  # a glTF node scaled by 1e-4 went unwarned)
         E = _get(mesh.edges, "vertices", len(mesh.edges), np.int32, 2)
         if not len(E):
             continue

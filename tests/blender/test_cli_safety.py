@@ -223,7 +223,8 @@ HUGE_CUBE = "".join(f"v {x} {y} {z}\n" for x in (-3e38, 3e38) for y in (-3e38, 3
     ("--memory-budget 0", ["--memory-budget"]), ("--merge-distance -1", ["--merge-distance"]),
     ("--merge-distance 0.5", ["--merge-distance", "closer than 0.5 collapsed every face"]),
     ("--kernel gauss", ["--kernel"]), ("no faces", ["empty"]),
-    ("nan in obj", ["NaN or infinite", "line(s) 3, 8", "2 vertices", "read them as 0"]),
+    ("nan in obj", ["NaN, infinite or out-of-range", "line(s) 3, 5, 8", "3 vertices",
+                    "read them as 0"]),
     ("too large", ["memory"]), ("beyond float32", ["surface is not finite", "scale"]),
     ("missing folder", ["its folder", "does not exist", "create it first"]),
 ])
@@ -261,6 +262,7 @@ def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, 
     elif case == "nan in obj":  # Blender's importer reads them as 0: a dented cube, exit 0
         corners = [f"v {x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1)]
         corners[1], corners[6] = "v 0 0 nan\n", "v 1 -INF 0\n"  # lines 3 and 8
+        corners[3] = "v 0 1 1e39\n"  # beyond float32: read as 0 too (a review), line 5
         good.write_text("# a cube\n" + "".join(corners) + HUGE_CUBE.split("\n", 8)[8])
     elif case == "too large":
         args += ["--resolution", "64", "--memory-budget", "1"]
@@ -293,3 +295,20 @@ def test_an_obj_output_too_fine_for_its_six_decimals_is_warned_about(tmp_path):
         assert bool(said) == warned, out.stderr
         if warned:
             assert said[0].startswith("warning: ") and "write .glb" in said[0]
+
+
+def test_the_six_decimals_warning_measures_world_coordinates(blender, tmp_path):
+    """Found by a review: the warning read the mesh's local edges, but the exporter writes
+    world coordinates: a glTF node scaled by 1e-4 went unwarned, a tiny mesh scaled up by
+    1e4 was warned about."""
+    said = {}
+    for name, size, scale in (("tiny_world", 2.0, 1e-4), ("tiny_local", 2e-4, 1e4)):
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.mesh.primitive_cube_add(size=size)
+        bpy.context.active_object.scale = (scale,) * 3
+        src = tmp_path / f"{name}.glb"
+        bpy.ops.export_scene.gltf(filepath=str(src), export_format="GLB")
+        out = cli(src, "-o", tmp_path / f"{name}.obj", cwd=tmp_path)
+        assert out.returncode == 0, out.stderr
+        said[name] = "6 decimals" in out.stderr
+    assert said == {"tiny_world": True, "tiny_local": False}
