@@ -163,10 +163,13 @@ class FairnessRule:
 
 def face_normals(topo, X) -> np.ndarray:
     """Unit normals (F, 3) of the faces at positions X (V, 3): the normalised vector area
-    sum_k x_k x x_{k+1} (a non-planar face's mean orientation)."""
+    sum_k x_k x x_{k+1} (a non-planar face's mean orientation), about each face's first
+    corner: from absolute coordinates it cancelled far from the origin (found by a review:
+    a 1 cm mesh at 5e5 got NaN normals and the build a raw LinAlgError)."""
     fv, nx, cf = topo.face_vertices, topo.corner_next, topo.corner_face
+    base = X[fv[topo.face_offsets[cf]]]
     fn = np.zeros((topo.n_faces, 3))
-    np.add.at(fn, cf, np.cross(X[fv], X[fv[nx]]))
+    np.add.at(fn, cf, np.cross(X[fv] - base, X[fv[nx]] - base))
     return fn / np.linalg.norm(fn, axis=1, keepdims=True)
 
 

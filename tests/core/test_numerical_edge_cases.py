@@ -207,3 +207,14 @@ def test_translation_far_from_the_origin():
     S1 = BlendingSurface(X, faces).tessellate(3)[0]
     S2 = BlendingSurface(X + t, faces).tessellate(3)[0]
     assert np.abs(S2 - (S1 + t)).max() <= 1e-8
+
+
+@pytest.mark.parametrize("size,offset", [(0.01, 5e5), (1.0, 5e7)])
+def test_a_small_mesh_far_from_the_origin_builds_like_at_the_origin(size, offset):
+    """Found by a review: face normals summed x_k x x_{k+1} from absolute coordinates,
+    which cancelled far from the origin (a 1 cm icosphere at 5e5: NaN normals, and the
+    build raised a raw LinAlgError). Now about each face's first corner."""
+    X, faces = primitives.icosphere(1)
+    P0 = BlendingSurface(X, faces).tessellate(2)[0]
+    P = BlendingSurface(X * size + offset, faces).tessellate(2)[0]
+    assert np.abs((P - offset) / size - P0).max() <= 1e-5
