@@ -22,6 +22,7 @@ new edges. Faces turning back by less (Suzanne has two quads at 1 degree) are ke
 from __future__ import annotations
 
 import math
+from collections import defaultdict
 
 import numpy as np
 
@@ -35,12 +36,14 @@ REFLEX = math.radians(10.0)  # a corner turning back by more than this makes a f
 MIN_CORNERS = 5
 # the largest corner a piece keeps: straight corners are cut too (a piece whose sides
 # have collinear corners is laid out far from its shape: the L-shaped 12-gon cut in two
-# with its midpoints still folded, 1 reversed output triangle at r = 4)
-LIMIT = math.radians(179.0)
-_TIE = 1e-6
+# with its midpoints still folded, 1 reversed output triangle at r = 4), but not the
+# corners of a round cap (179 degrees made a review's 361-gon circle with a notch cut at
+# every corner: 170 s)
+LIMIT = math.pi - 1e-4
+_TIE = 1e-6  # cuts whose smallest angles differ by less (radians) are equally good
 # cuts are looked for from at most this many of the widest corners of a piece (with ties):
 # a 400-corner star took 88 s looking from all of them, one cut at a time in Python
-CANDIDATES = 8  # ears whose smallest angles differ by less (radians) are equally good
+CANDIDATES = 8
 
 
 def _turns(p2: np.ndarray) -> np.ndarray:
@@ -60,15 +63,16 @@ def concave_faces(x, sizes, flat) -> np.ndarray:
     F = len(sizes)
     cf = np.repeat(np.arange(F), sizes)
     nxt = flat[corner_successors(sizes)]
-    p, q = x[flat], x[nxt]
+    first = np.r_[0, np.cumsum(sizes)[:-1]]
+    base = x[flat[first[cf]]]  # relative to each face's first corner: no cancellation far
+    p, q = x[flat] - base, x[nxt] - base  # from the origin (a review: 63 degrees off at 5e6)
     normal = np.zeros((F, 3))
     np.add.at(normal, cf, np.cross(p, q))
     length = np.linalg.norm(normal, axis=1)
     normal /= np.where(length > 0, length, 1.0)[:, None]
-    first = np.r_[0, np.cumsum(sizes)[:-1]]
     prv_corner = np.arange(len(flat)) - 1
     prv_corner[first] += sizes  # the first corner's predecessor is the face's last
-    e1 = p - x[flat[prv_corner]]
+    e1 = p - (x[flat[prv_corner]] - base)
     e2 = q - p
     turn = np.arctan2(np.einsum("ij,ij->i", np.cross(e1, e2), normal[cf]),
                       np.einsum("ij,ij->i", e1, e2))
@@ -79,7 +83,8 @@ def concave_faces(x, sizes, flat) -> np.ndarray:
 
 def _plane(points: np.ndarray) -> np.ndarray:
     """(n, 2) coordinates of the face's corners (n, 3) in the plane of its vector area,
-    counter-clockwise about it."""
+    counter-clockwise about it (about their mean: rounding far from the origin)."""
+    points = points - points.mean(axis=0)
     normal = np.cross(points, np.roll(points, -1, axis=0)).sum(axis=0)
     normal /= np.linalg.norm(normal)
     u = points[1] - points[0]
@@ -133,17 +138,21 @@ def _interior(prev, at, nxt) -> np.ndarray:
     return math.pi - turn
 
 
-def _best_cut(P: np.ndarray, wide) -> tuple | None:
+def _best_cut(P: np.ndarray, wide, taken=frozenset()) -> tuple | None:
     """(i, j) the diagonal that splits P best: from a corner i of more than ``LIMIT``,
     resolving the most such ends (both pieces below ``LIMIT`` there), then with the
     largest smallest angle at its ends in the two pieces (no slivers); of the cuts within
-    ``_TIE`` of the best, the first (i, then j, ascending). None where no diagonal exists
+    ``_TIE`` of the best, the first (i, then j, ascending). `taken`: corner pairs (i, j),
+    i < j, that may not be cut (edges the mesh has already). None where no diagonal exists
     (P not simple). Vectorized over j: O(len(wide) m^2) for m corners."""
     m = len(P)
     here = _interior(np.roll(P, 1, axis=0), P, np.roll(P, -1, axis=0)) > LIMIT
     cuts, keys = [], []
     for i in wide:
         j = np.flatnonzero(_diagonals(P, i))
+        if taken:
+            j = np.array([k for k in j.tolist() if (min(i, k), max(i, k)) not in taken],
+                         dtype=np.int64)
         if not len(j):
             continue
         pi, pj = P[i], P[j]
@@ -165,12 +174,14 @@ def _best_cut(P: np.ndarray, wide) -> tuple | None:
     return cuts[int(np.flatnonzero(good)[0])]
 
 
-def convex_pieces(p2: np.ndarray) -> list:
+def convex_pieces(p2: np.ndarray, taken=frozenset()) -> list:
     """Pieces (lists of local corner indices, counter-clockwise) covering the simple
     polygon p2 (n, 2), cut along diagonals between its corners until every corner of
     every piece is below ``LIMIT``: each cut starts at a corner above it and is chosen by
-    :func:`_best_cut`; a piece with no diagonal (p2 not simple in its plane) is kept as
-    it is, so a face that cannot be cut comes back whole."""
+    :func:`_best_cut`, never along a pair of `taken` (corner index pairs (a, b), a < b:
+    edges the mesh has already, which a cut would make non-manifold); a piece with no
+    diagonal left (p2 not simple in its plane, or every diagonal taken) is kept as it is,
+    so a face that cannot be cut comes back whole."""
     todo, out = [list(range(len(p2)))], []
     while todo:
         poly = todo.pop()
@@ -183,7 +194,9 @@ def convex_pieces(p2: np.ndarray) -> list:
             angle = (math.pi - _turns(P))[wide]
             wide = [k for k, a in zip(wide, angle)
                     if a >= np.sort(angle)[-CANDIDATES] - _TIE][:CANDIDATES]
-        cut = _best_cut(P, wide)
+        where = {c: k for k, c in enumerate(poly)}
+        cut = _best_cut(P, wide, frozenset((min(where[a], where[b]), max(where[a], where[b]))
+                                           for a, b in taken if a in where and b in where))
         if cut is None:  # not simple in this plane: kept as it is
             out.append(poly)
             continue
@@ -204,10 +217,22 @@ def split_concave(x, sizes, flat, origin, notes):
     if not concave.any():
         return sizes, flat, origin
     offsets = np.r_[0, np.cumsum(sizes)]
+    nxt = flat[corner_successors(sizes)]
+    near = defaultdict(set)  # each vertex's neighbours along the mesh's edges
+    for a, b in zip(flat.tolist(), nxt.tolist()):
+        near[a].add(b)
+        near[b].add(a)
     new_faces, new_origin, split = [], [], []
     for f in range(len(sizes)):
         face = flat[offsets[f]:offsets[f + 1]].tolist()
-        pieces = convex_pieces(_plane(x[face])) if concave[f] else []
+        pieces = []
+        if concave[f]:
+            # a chord that is already an edge of the mesh (a face on it): not cut (a
+            # review: the cut made that edge non-manifold)
+            at = {v: k for k, v in enumerate(face)}
+            taken = frozenset((min(at[a], at[b]), max(at[a], at[b])) for a in face
+                              for b in near[a] if b in at)
+            pieces = convex_pieces(_plane(x[face]), taken)
         if len(pieces) > 1:
             split.append(origin[f])
             new_faces += [[face[i] for i in piece] for piece in pieces]

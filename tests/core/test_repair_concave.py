@@ -113,3 +113,31 @@ def test_the_split_of_a_symmetric_face_does_not_flip_under_rounding():
             M = L12.copy()
             M[k] += t
             assert convex_pieces(M) == p0
+
+
+def test_a_chord_that_is_already_an_edge_is_not_cut():
+    """Found by a review: an L hexagon whose best cut (0, 3) is also an edge of a triangle
+    standing on it; cutting there made an edge of three faces."""
+    from gerbs_core.mesh.repair import repair_mesh
+
+    L = np.array([(0, 0, 0), (2, 0, 0), (2, 1, 0), (1, 1, 0), (1, 2, 0), (0, 2, 0)], float)
+    assert [0, 3] in [sorted(set(a) & set(b)) for a in convex_pieces(L[:, :2])
+                      for b in convex_pieces(L[:, :2]) if a != b]
+    X = np.vstack([L, [(0.5, 0.5, 1.0)]])
+    r = repair_mesh(X, [tuple(range(6)), (3, 0, 6)])
+    tags = [w.tag for w in r.warnings]
+    assert "concave_face" in tags and "non_manifold_edge" not in tags
+    T = r.topology
+    assert T.n_faces > 2 and int((T.edge_faces[:, 1] >= 0).sum() + len(T.edge_faces)) > 0
+
+
+def test_a_small_face_far_from_the_origin_is_cut_as_at_the_origin():
+    """Found by a review: the faces' normals were summed from absolute coordinates, 63
+    degrees off for a 1 cm face at 5e6, so its concavity was missed."""
+    p = _star()[:, :2] * 0.01
+    pieces = convex_pieces(p)
+    for offset in (5e5, 5e6):
+        X = np.c_[p + offset, np.full(12, offset)]
+        s = BlendingSurface(X, [tuple(range(12))])
+        assert [w.tag for w in s.warnings] == ["concave_face"]
+        assert len(s.topology.face_sizes) == len(pieces)
