@@ -28,8 +28,22 @@ def _short(indices: Sequence[int] | None, limit: int = 10) -> str:
     return f" [{shown}{more}]"
 
 
+def _rebuilt(cls, args, state):
+    err = cls.__new__(cls)
+    err.args = args
+    err.__dict__.update(state)
+    return err
+
+
 class GERBSError(Exception):
     """Base class of every error raised by gerbs_core."""
+
+    def __reduce__(self):
+        # pickle and deepcopy call cls(*self.args), but the subclasses' arguments are not
+        # their formatted message (found by a review: an InvalidMeshError raised in a worker
+        # process broke the pool instead of reaching the caller): rebuilt from the message
+        # and the attributes
+        return _rebuilt, (type(self), self.args, dict(self.__dict__))
 
 
 class GERBSValueError(GERBSError, ValueError):

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Immutable"]
+__all__ = ["Immutable", "ReadOnlyArrays"]
 
 _READ_ONLY = "_read_only_arrays"
 
@@ -44,7 +44,26 @@ def _read_only_arrays(state: dict) -> list:
     return out
 
 
-class Immutable:
+class ReadOnlyArrays:
+    """Mixin: pickling and ``copy.deepcopy`` restore the object's read-only numpy arrays
+    (its own and those of the package's objects it holds) read-only (module doc). Also for
+    the package's mutable-looking but never-written objects (topologies, lattices, gauges:
+    a review found an unpickled envelope's ``line_a`` writable, and writing it changed its
+    star gauge's values)."""
+
+    __slots__ = ()
+
+    def __getstate__(self):
+        return {**self.__dict__, _READ_ONLY: _read_only_arrays(self.__dict__)}
+
+    def __setstate__(self, state: dict) -> None:
+        state = dict(state)
+        for a in state.pop(_READ_ONLY, ()):
+            a.setflags(write=False)
+        self.__dict__.update(state)
+
+
+class Immutable(ReadOnlyArrays):
     """Mixin: after :meth:`_freeze` (the constructor's last step) ``setattr`` and
     ``delattr`` raise AttributeError naming the class and the attribute."""
 
@@ -61,15 +80,6 @@ class Immutable:
             raise AttributeError(f"{type(self).__name__} objects are immutable: cannot "
                                  f"delete {name!r}")
         object.__delattr__(self, name)
-
-    def __getstate__(self):
-        return {**self.__dict__, _READ_ONLY: _read_only_arrays(self.__dict__)}
-
-    def __setstate__(self, state: dict) -> None:
-        state = dict(state)
-        for a in state.pop(_READ_ONLY, ()):
-            a.setflags(write=False)
-        self.__dict__.update(state)
 
     def _freeze(self) -> None:
         object.__setattr__(self, "_frozen", True)

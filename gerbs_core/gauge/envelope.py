@@ -62,6 +62,7 @@ from .blend_ragged import build_blend
 from .envelope_spline import envelope_u, reciprocal_derivs
 from .fallbacks import build_constant, build_fillet, interval_ratios
 from ..errors import InvalidParameterError, InvalidPointSetError
+from ..immutable import ReadOnlyArrays
 from ..kernels.base import check_order
 
 __all__ = ["RadialEnvelope"]
@@ -78,7 +79,7 @@ def _check_unit_interval(name, value, closed_right):
     return v
 
 
-class RadialEnvelope:
+class RadialEnvelope(ReadOnlyArrays):
     """Exact radius rho(theta) of a polygonal star and its smooth lower envelope.
 
     Parameters

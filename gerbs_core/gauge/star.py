@@ -30,6 +30,7 @@ import numpy as np
 from .envelope import TWO_PI, RadialEnvelope
 from .jet import bump_jet, polar_jet, star_gauge_jet
 from ..errors import InvalidParameterError
+from ..immutable import ReadOnlyArrays
 from ..kernels.base import check_order
 
 __all__ = ["StarGauge", "RadialEnvelope"]
@@ -41,7 +42,7 @@ def _check_nu(nu):
     return check_order(nu, 2, owner="the gauge")
 
 
-class StarGauge:
+class StarGauge(ReadOnlyArrays):
     """Gauge g and size function psi = b(g) of one star (eq. (62), DESIGN 4-5).
 
     Parameters

@@ -36,6 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import InvalidParameterError, ResourceLimitError
+from ..immutable import ReadOnlyArrays
 from ..inputs import integer
 from .arrays import read_only as _ro
 from .lattice_faces import output_edges, polygon_table
@@ -162,7 +163,7 @@ def _check_flip(flip, sizes) -> np.ndarray:
     return _ro(f.astype(np.int64))
 
 
-class Lattice:
+class Lattice(ReadOnlyArrays):
     """Samples and output triangles of ``topology`` at ``resolution`` r >= 1 (immutable).
 
     Attributes (read-only arrays; P samples, T triangles, L local entries):

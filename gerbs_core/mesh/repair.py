@@ -60,6 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidMeshError, _short
+from ..immutable import ReadOnlyArrays
 from . import repair_concave as rc
 from . import repair_faces as rf
 from . import repair_sheets as rs
@@ -123,7 +124,7 @@ class MeshWarning:
 
 
 @dataclass(frozen=True)
-class RepairedMesh:
+class RepairedMesh(ReadOnlyArrays):
     """The result of :func:`repair_mesh` (module docstring). ``representative (V,)``:
     the input vertex each input vertex was welded to (itself if none)."""
 

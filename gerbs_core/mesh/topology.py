@@ -53,6 +53,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InvalidMeshError
+from ..immutable import ReadOnlyArrays
 from ..inputs import check_index, is_integer
 from .arrays import read_only as _ro
 from .topology_build import check_faces, check_indices, face_cycles, mesh_edges, vertex_stars
@@ -103,7 +104,7 @@ def _parse_faces(faces, n_vertices):
     return sizes, flat
 
 
-class MeshTopology:
+class MeshTopology(ReadOnlyArrays):
     """Immutable connectivity of an oriented polygon 2-manifold with boundary.
 
     Parameters

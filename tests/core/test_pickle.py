@@ -67,3 +67,40 @@ def test_a_copy_computes_the_same_and_stays_read_only(make, how):
     with pytest.raises(AttributeError, match="immutable"):
         dup.anything = 1
     np.testing.assert_array_equal(evaluate(dup), before)
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_the_errors_survive_pickling_with_their_attributes(how):
+    """Found by a review: InvalidMeshError and InvalidParameterError could not be pickled
+    or deep-copied (their arguments are not their message), so one raised in a worker
+    process broke a ProcessPoolExecutor instead of reaching the caller."""
+    from gerbs_core.errors import (InvalidMeshError, InvalidParameterError,
+                                   InvalidPointSetError, ResourceLimitError)
+
+    with pytest.raises(InvalidMeshError) as info:
+        g.BlendingSurface([[0, 0, 0], [1, 0, 0], [2, 0, 0]], [(0, 1, 2)])
+    errors = [info.value, InvalidParameterError("alpha", "must be > 0"),
+              InvalidPointSetError("points: duplicated", [3, 7]), ResourceLimitError("too big")]
+    for err in errors:
+        dup = pickle.loads(pickle.dumps(err)) if how == "pickle" else copy.deepcopy(err)
+        assert type(dup) is type(err) and str(dup) == str(err) and dup.args == err.args
+        assert vars(dup) == vars(err)
+    assert errors[0].problem == "empty" and errors[1].name == "alpha"
+    assert errors[2].indices == (3, 7)
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_the_surfaces_parts_stay_read_only_too(how):
+    """Found by a review: MeshTopology, Lattice, RepairedMesh and the star gauges came back
+    writable (an unpickled envelope's line_a, written, changed its gauge's values)."""
+    V, F = icosphere(1)
+    S = g.BlendingSurface(V, F)
+    parts = {"topology": (S.topology, "face_vertices"), "lattice": (S.lattice(2), "face"),
+             "repair": (S.repair, "vertex_map")}
+    for name, (obj, attr) in parts.items():
+        assert not getattr(obj, attr).flags.writeable, name
+        dup = pickle.loads(pickle.dumps(obj)) if how == "pickle" else copy.deepcopy(obj)
+        a = getattr(dup, attr)
+        np.testing.assert_array_equal(a, getattr(obj, attr))
+        with pytest.raises(ValueError):
+            a[...] = 0
