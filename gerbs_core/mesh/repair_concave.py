@@ -10,10 +10,14 @@ triangles at 20, 57 at 90; none at 10).
 
 A face of ``MIN_CORNERS`` (5) or more corners with a corner turning back by more than
 ``REFLEX`` (10 degrees) in the plane of its vector area is cut along diagonals until every corner of every piece is below
-``LIMIT`` (179 degrees: straight corners are cut too): each cut starts at such a corner
+``LIMIT`` (180 degrees less 1e-4 radians: straight corners are cut too), never along a
+chord that is already an edge of the mesh: each cut starts at such a corner
 and is the diagonal that resolves the most of them at its ends, with the largest
 smallest angle there, so an L-shaped hexagon gives two quads. Concave quads are kept
-(``MIN_CORNERS``), and fold as before. (Ear clipping
+(``MIN_CORNERS``), and fold as before. The cuts are a function of the shape the surface is
+laid out from: in Follow mode, an animation or a drag that changes a concave n-gon's
+shape may change its cuts, and the output's topology with them (a review: a 32-gon
+squeezed into a bean gave 321, 337 and 369 output points on three frames). (Ear clipping
 followed by Hertel-Mehlhorn was tried first: the star came out in eight pieces of mixed
 shapes whose seams showed as ridges on an extruded star, rendered.) No vertex is added; the pieces keep the face's
 orientation and its input index (``face_map``), and the surface is C-infinity across the
