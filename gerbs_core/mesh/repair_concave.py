@@ -65,6 +65,8 @@ def concave_faces(x, sizes, flat) -> np.ndarray:
     about their vector area's normal."""
     sizes = np.asarray(sizes, dtype=np.int64)
     F = len(sizes)
+    if not (sizes >= MIN_CORNERS).any():  # triangle and quad meshes: nothing to look at
+        return np.zeros(F, dtype=bool)
     cf = np.repeat(np.arange(F), sizes)
     nxt = flat[corner_successors(sizes)]
     first = np.r_[0, np.cumsum(sizes)[:-1]]
