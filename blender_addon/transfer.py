@@ -104,15 +104,24 @@ class Transfer:
         self.offsets, self.corners, face, local = lattice.polygons(quads)
         self.face = np.asarray(repair.face_map)[face]  # the input face of each output face
         self.n_points = lattice.n_points
-        W = lattice.corner_weights(local=True)[local]  # (Co, n_max)
+        # per face size, each as wide as its faces (a dense (corners, largest face) array
+        # made a 100 x 100 grid with one 128-gon take 3.4 GB; a test with concave n-gons)
         cf = lattice.local_face[local]
-        slot = np.arange(W.shape[1])
-        valid = slot[None, :] < tp.face_sizes[cf][:, None]
-        csr = np.where(valid, tp.face_offsets[cf][:, None] + slot, 0)
-        self._corner_w = W
-        self._corner_src = inp.loops()[input_corners(tp, repair, inp)[csr]]  # (Co, n_max)
-        self._corner_near = self._corner_src[np.arange(len(W)), np.argmax(W, axis=1)]
-        near = np.argmax(lattice.corner_weights(), axis=1)  # in each sample's evaluation face
+        size = tp.face_sizes[cf]
+        loops, source = inp.loops(), input_corners(tp, repair, inp)
+        self._corner_groups = []  # (output corners, weights (k, n), input loops (k, n))
+        self._corner_near = np.empty(len(local), dtype=np.int64)
+        for n in np.unique(size).tolist():
+            rows = np.flatnonzero(size == n)
+            W = lattice.corner_weights(local=True, rows=local[rows])
+            src = loops[source[tp.face_offsets[cf[rows]][:, None] + np.arange(n)]]
+            self._corner_groups.append((rows, W, src))
+            self._corner_near[rows] = src[np.arange(len(rows)), np.argmax(W, axis=1)]
+        near = np.empty(lattice.n_points, dtype=np.int64)  # in each sample's evaluation face
+        point_size = tp.face_sizes[lattice.face]
+        for n in np.unique(point_size).tolist():
+            rows = np.flatnonzero(point_size == n)
+            near[rows] = np.argmax(lattice.corner_weights(rows=rows), axis=1)
         self._point_near = vmap[tp.face_vertices[tp.face_offsets[lattice.face] + near]]
         self.vertex_map = vmap  # the input vertex of each output vertex sample
         self.out_edges = out_edges
@@ -134,7 +143,9 @@ class Transfer:
         v = layer.values
         if layer.domain == "CORNER":
             if _floating(layer.data_type):
-                out = np.einsum("ck,ckd->cd", self._corner_w, v[self._corner_src].astype(np.float64))
+                out = np.empty((len(self._corner_near),) + v.shape[1:])
+                for rows, W, src in self._corner_groups:
+                    out[rows] = np.einsum("ck,ck...->c...", W, v[src].astype(np.float64))
             else:
                 out = v[self._corner_near]
         elif layer.domain == "FACE":

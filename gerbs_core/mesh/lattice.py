@@ -333,11 +333,13 @@ class Lattice(ReadOnlyArrays):
         np.cumsum(np.bincount(self.face, minlength=self.topology.n_faces), out=off[1:])
         return order, off
 
-    def corner_weights(self, local: bool = False) -> np.ndarray:
+    def corner_weights(self, local: bool = False, rows=None) -> np.ndarray:
         """(P, n_max) weights of each sample's face corners (slot k = corner k of its face,
         0 beyond the face size): sum_k w_k X_k is :meth:`map_to_polygon` of per-corner
-        values X (n-gon centres the corners' mean), as a linear map."""
-        return corner_weights(self, local)
+        values X (n-gon centres the corners' mean), as a linear map. `rows` (int array):
+        those samples only, (len(rows), their largest face size) -- one large n-gon makes
+        the full array as wide for every sample."""
+        return corner_weights(self, local, rows)
 
     def map_to_polygon(self, corners2d, centers=None, local: bool = False) -> np.ndarray:
         """Map samples into their faces' reference polygons (vectorized).

@@ -20,13 +20,17 @@ def _params(lat, local: bool):
     return lat.face, lat.fan, lat.uv
 
 
-def corner_weights(lat, local: bool = False) -> np.ndarray:
-    """(P, n_max) weights of each sample's face corners (:meth:`Lattice.corner_weights`)."""
+def corner_weights(lat, local: bool = False, rows=None) -> np.ndarray:
+    """(P, n_max) weights of each sample's face corners (:meth:`Lattice.corner_weights`);
+    `rows`: only those samples, as wide as their largest face."""
     tp = lat.topology
     face, fan, uv = _params(lat, local)
+    if rows is not None:
+        face, fan, uv = face[rows], fan[rows], uv[rows]
     n = tp.face_sizes[face]
     a, b = uv[:, 0], uv[:, 1]
-    w = np.zeros((len(face), int(tp.face_sizes.max())))
+    width = int(tp.face_sizes.max()) if rows is None else int(n.max(initial=0))
+    w = np.zeros((len(face), width))
     s = n == 3
     if s.any():
         w[s, 0], w[s, 1], w[s, 2] = 1 - a[s] - b[s], a[s], b[s]
