@@ -24,8 +24,8 @@ geometric tests use the rest shape when one is given):
    edge (the surface closes over them, through all their vertices); where that is not
    possible (a boundary edge, a self-cancelling polygon) they are dropped
    (``degenerate_face``) and the surface is bounded by their neighbours.
-   ``concave_face``: a face of 5 or more corners with a corner turning back by more than
-   10 degrees in its plane is split along diagonals into convex faces
+   ``concave_face``: a face of 5 or more corners whose corners turn back by more than 10
+   degrees in all, in its plane, is split along diagonals into convex faces
    (:mod:`gerbs_core.mesh.repair_concave`: a face is laid out as a convex polygon, and the
    surface folds at a reflex corner).
 4. ``non_manifold_edge``: an edge of 3 or more faces is split into manifold sheets
@@ -85,8 +85,10 @@ _TEXT = {
     "duplicate_face": "faces with the vertices of an earlier face: dropped",
     "zero_area_face": "zero-area (collinear) faces merged into the face across their longest "
                       "edge: the surface closes over them",
-    "concave_face": "concave n-gons (a corner turning back by more than 10 degrees) split "
-                    "into convex faces along diagonals: the surface is smooth across them",
+    "concave_face": "concave n-gons (turning back by more than 10 degrees in all) split into "
+                    "convex faces along diagonals: the surface is smooth across them (a gear "
+                    "or a star with many points is cut into slivers: Poke Faces first gives "
+                    "a fairer surface)",
     "non_manifold_edge": "edges of 3 or more faces split into manifold sheets (faces paired "
                          "by orientation and angle, an unpaired face has the edge as a "
                          "boundary)",
