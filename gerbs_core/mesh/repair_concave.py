@@ -1,31 +1,31 @@
-"""Concave faces split into convex ones (repair stage 3b, ``concave_face``).
+"""Concave n-gons cut into convex faces (repair stage 3b, ``concave_face``).
 
-Every face is laid out as a convex polygon (:func:`gerbs_core.mesh.layout.face_layouts`),
-so on a face with a reflex corner the blended local functions map a convex polygon onto
-a concave one, and the surface folds near that corner. Found by a test with messy meshes
+Why: every face is laid out as a convex polygon (:func:`gerbs_core.mesh.layout.face_layouts`),
+so on a concave face the blended local functions map a convex polygon onto a concave one
+and the surface folds near the reflex corners. Found by a test with messy meshes
 (2026-12-07, r = 4): a flat star-shaped 12-gon had 36 of its 192 output triangles
-reversed, an L-shaped 12-gon 6, and text converted to a mesh with n-gon letters 75% of its
-area; a flat dart quad folds from a reflex angle of about 20 degrees (r = 8: 3 reversed
-triangles at 20, 57 at 90; none at 10).
+reversed, an L-shaped 12-gon 6, text with n-gon letters 3,529 of 10,480.
 
-A face of ``MIN_CORNERS`` (5) or more corners whose corners turn back by more than
-``REFLEX`` (10 degrees) in all, in the plane of its vector area, is cut (in all: a
-finely segmented concave curve turns back by less than 10 degrees at every corner, and a
-test with concave n-gons found a half annulus of 50 corners and an L with a 12-segment
-fillet unsplit and folded: 230 of 800 and 186 of 288 output triangles reversed, now
-none) along diagonals until every corner of every piece is below
-``LIMIT`` (180 degrees less 1e-4 radians: straight corners are cut too), never along a
-chord that is already an edge of the mesh: each cut starts at such a corner
-and is the diagonal that resolves the most of them at its ends, with the largest
-smallest angle there, so an L-shaped hexagon gives two quads. Concave quads are kept
-(``MIN_CORNERS``), and fold as before. The cuts are a function of the shape the surface is
-laid out from: in Follow mode, an animation or a drag that changes a concave n-gon's
-shape may change its cuts, and the output's topology with them (a review: a 32-gon
-squeezed into a bean gave 321, 337 and 369 output points on three frames). (Ear clipping
-followed by Hertel-Mehlhorn was tried first: the star came out in eight pieces of mixed
-shapes whose seams showed as ridges on an extruded star, rendered.) No vertex is added; the pieces keep the face's
-orientation and its input index (``face_map``), and the surface is C-infinity across the
-new edges. Faces turning back by less (Suzanne has two quads at 1 degree) are kept.
+Which faces: ``MIN_CORNERS`` (5) or more corners whose corners turn back by more than
+``REFLEX`` (10 degrees) in all, in the plane of their vector area. In all, not per corner:
+a finely segmented concave curve turns back by less than 10 degrees at each corner (a half
+annulus of 50 corners folded unsplit, 230 of 800 triangles reversed). Quads are kept: a
+deformation makes quads concave far more often than a modeller draws one, and cutting
+them would change the output's topology from frame to frame.
+
+How: along diagonals until every corner of every piece is below ``LIMIT`` (180 degrees
+less 1e-4 radians: straight corners are cut too); each cut starts at such a corner and is
+the diagonal resolving the most of them at its ends, then with the largest smallest angle
+there (an L-shaped hexagon gives two quads); ties within ``_TIE`` go to the first corner,
+so rounding cannot flip a symmetric face's cut; a chord that is already an edge of the
+mesh is never cut (it would become non-manifold). No vertex is added; the pieces keep the
+face's orientation and its input index (``face_map``), and the surface is C-infinity
+across the new edges. Ear clipping followed by Hertel-Mehlhorn, tried first, gave pieces
+of mixed shapes whose seams showed as ridges on an extruded star (rendered).
+
+Limits (docs/design.md, mesh repair): the cuts follow the shape the surface is laid out
+from, so in Follow mode a drag or an animation may change them and the output's topology;
+gears and many-pointed stars are cut into slivers and still fold (Poke Faces first).
 """
 from __future__ import annotations
 
