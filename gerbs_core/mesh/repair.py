@@ -86,9 +86,7 @@ _TEXT = {
     "zero_area_face": "zero-area (collinear) faces merged into the face across their longest "
                       "edge: the surface closes over them",
     "concave_face": "concave n-gons (turning back by more than 10 degrees in all) split into "
-                    "convex faces along diagonals: the surface is smooth across them (a gear "
-                    "or a star with many points is cut into slivers: Poke Faces first gives "
-                    "a fairer surface)",
+                    "convex faces along diagonals: the surface is smooth across them",
     "non_manifold_edge": "edges of 3 or more faces split into manifold sheets (faces paired "
                          "by orientation and angle, an unpaired face has the edge as a "
                          "boundary)",
