@@ -433,8 +433,8 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
             f"(loose or merged ones); raise the resolution"), progress, render=render)
     # checked first (a review: a Bound mesh with loose vertices at resolution 1 failed
     # with a raw ValueError writing its rest shape on fewer output points)
-    rest_mod.write(res.data, st.rest if settings["rest"] == "bound" else None)  # kept with it
-    rest_mod.remember(bindings, key[:2], inp, st.rest if settings["rest"] == "bound" else None)
+    rest_mod.write(res.data, rest)  # kept with it
+    rest_mod.remember(bindings, key[:2], inp, rest)
     st.stencil, st.points, st.warnings = built.stencil, P, built.surface.warnings
     st.points32 = P32  # what write_geometry wrote
     # logged when they change, not at every rebuild (a Follow drag rebuilds at each pause:
