@@ -56,6 +56,7 @@ from .row_values import (candidate_coefs, candidate_values, chunks, copy_aliases
                          per_degree, row_sums, square_norms)
 from .fillets import fillet_sides, smoothstep
 from .spread_fits import SPREAD, gate, spread_candidates, spread_faces, star_spread
+from .validation import face_vector_areas
 
 __all__ = ["FairnessRule", "DMAX", "fair_fits", "face_normals", "face_sharpness",
            "tension_weights"]
@@ -163,13 +164,8 @@ class FairnessRule:
 
 def face_normals(topo, X) -> np.ndarray:
     """Unit normals (F, 3) of the faces at positions X (V, 3): the normalised vector area
-    sum_k x_k x x_{k+1} (a non-planar face's mean orientation), about each face's first
-    corner: from absolute coordinates it cancelled far from the origin (found by a review:
-    a 1 cm mesh at 5e5 got NaN normals and the build a raw LinAlgError)."""
-    fv, nx, cf = topo.face_vertices, topo.corner_next, topo.corner_face
-    base = X[fv[topo.face_offsets[cf]]]
-    fn = np.zeros((topo.n_faces, 3))
-    np.add.at(fn, cf, np.cross(X[fv] - base, X[fv[nx]] - base))
+    (a non-planar face's mean orientation, :func:`~.validation.face_vector_areas`)."""
+    fn = face_vector_areas(X, topo.face_sizes, topo.face_vertices)
     return fn / np.linalg.norm(fn, axis=1, keepdims=True)
 
 

@@ -19,7 +19,8 @@ from ..errors import InvalidMeshError, InvalidParameterError
 from .topology import MeshTopology
 from .topology_build import edge_error
 
-__all__ = ["validate_geometry", "flat_faces", "chain_faces", "not_a_polygon", "corner_successors",
+__all__ = ["validate_geometry", "flat_faces", "chain_faces", "not_a_polygon", "face_vector_areas",
+           "corner_successors",
            "check_finite", "OUTLIER_FACTOR"]
 
 # A vertex whose shortest edge is 1e6 median edge lengths away is a stray coordinate,
@@ -117,46 +118,50 @@ def not_a_polygon(longest, total) -> np.ndarray:
     return ~(2.0 * longest < total * (1.0 - CHAIN_RTOL))
 
 
-def chain_faces(x, sizes, flat) -> np.ndarray:
-    """(F,) bool: faces (CSR as :func:`flat_faces`) whose edge lengths admit no convex
-    polygon (:func:`not_a_polygon`): collinear corners, to the rounding of the positions."""
+def face_vector_areas(x, sizes, flat) -> np.ndarray:
+    """(F, 3) twice the vector areas sum_k (x_k - x_0) x (x_{k+1} - x_0) of CSR faces
+    (corner counts ``sizes`` (F,), vertices ``flat`` (C,); positions x (V, 3)), about each
+    face's first corner x_0: no cancellation far from the origin (from absolute
+    coordinates a 1 cm mesh at 5e5 got NaN normals, a review), and exactly 0 for
+    collinear corners and self-cancelling polygons."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    cf = np.repeat(np.arange(len(sizes)), sizes)
+    first = np.zeros(len(sizes), dtype=np.int64)
+    np.cumsum(sizes[:-1], out=first[1:])
+    base = x[flat[first[cf]]]
+    out = np.zeros((len(sizes), 3))
+    np.add.at(out, cf, np.cross(x[flat] - base, x[flat[corner_successors(sizes)]] - base))
+    return out
+
+
+def _edge_sums(x, sizes, flat) -> tuple:
+    """((F,) longest, (F,) total) edge lengths of CSR faces, each edge |x_next - x| as the
+    layout measures it (:func:`layout.face_layouts`)."""
     sizes = np.asarray(sizes, dtype=np.int64)
     cf = np.repeat(np.arange(len(sizes)), sizes)
     length = np.linalg.norm(x[flat[corner_successors(sizes)]] - x[flat], axis=1)
     longest, total = np.zeros(len(sizes)), np.zeros(len(sizes))
     np.maximum.at(longest, cf, length)
     np.add.at(total, cf, length)
-    return not_a_polygon(longest, total)
+    return longest, total
+
+
+def chain_faces(x, sizes, flat) -> np.ndarray:
+    """(F,) bool: faces (CSR as :func:`flat_faces`) whose edge lengths admit no convex
+    polygon (:func:`not_a_polygon`): collinear corners, to the rounding of the positions."""
+    return not_a_polygon(*_edge_sums(x, sizes, flat))
 
 
 def flat_faces(x, sizes, flat, rtol: float = 1e-12, laid_out: bool = True) -> np.ndarray:
     """(F,) bool: faces (CSR: corner counts ``sizes`` (F,), vertices ``flat`` (C,)) of zero
-    area, |vector area| <= rtol * (longest edge of the face)**2, or, where x is the shape
-    the faces are laid out from (`laid_out`), whose edge lengths admit no convex polygon
-    (:func:`not_a_polygon`); positions x (V, 3).
+    area, |vector area| <= rtol * (longest edge of the face)**2 (:func:`face_vector_areas`),
+    or, where x is the shape the faces are laid out from (`laid_out`), whose edge lengths
+    admit no convex polygon (:func:`chain_faces`); positions x (V, 3).
 
-    The vector area sum_k x_k x x_{k+1} / 2 is taken relative to the face's first corner
-    (no cancellation), so it vanishes exactly for collinear corners and for
-    self-cancelling polygons. Collinear corners stored in single precision (Blender's
-    positions) keep an area of about 1e-8 of the edge squared, but their edge lengths
-    admit no polygon: found by a test with messy meshes, whose T-junction sliver was
-    repaired from float64 positions and refused from Blender's."""
-    sizes = np.asarray(sizes, dtype=np.int64)
-    F = len(sizes)
-    cf = np.repeat(np.arange(F), sizes)
-    first = np.zeros(F, dtype=np.int64)
-    np.cumsum(sizes[:-1], out=first[1:])
-    nxt = corner_successors(sizes)
-    base = x[flat[first[cf]]]
-    p, q = x[flat] - base, x[flat[nxt]] - base
-    varea = np.zeros((F, 3))
-    np.add.at(varea, cf, np.cross(p, q))  # twice the vector area
-    length = np.linalg.norm(q - p, axis=1)
-    longest = np.zeros(F)
-    np.maximum.at(longest, cf, length)
-    zero = 0.5 * np.linalg.norm(varea, axis=1) <= rtol * longest ** 2
-    if not laid_out:
-        return zero
-    total = np.zeros(F)
-    np.add.at(total, cf, length)
-    return zero | not_a_polygon(longest, total)
+    Collinear corners stored in single precision (Blender's positions) keep an area of
+    about 1e-8 of the edge squared, but their edge lengths admit no polygon: found by a
+    test with messy meshes, whose T-junction sliver was repaired from float64 positions
+    and refused from Blender's."""
+    longest, total = _edge_sums(x, sizes, flat)
+    zero = 0.5 * np.linalg.norm(face_vector_areas(x, sizes, flat), axis=1) <= rtol * longest ** 2
+    return zero | not_a_polygon(longest, total) if laid_out else zero
