@@ -39,7 +39,7 @@ from collections import defaultdict
 
 import numpy as np
 
-from .validation import corner_successors
+from .validation import corner_successors, face_vector_areas
 
 REFLEX = math.radians(10.0)  # corners turning back by more than this in all: a concave face
 # quads are kept: a deformation (a shape key, an armature, a drag) makes quads concave far
@@ -59,13 +59,21 @@ _TIE = 1e-6  # cuts whose smallest angles differ by less (radians) are equally g
 CANDIDATES = 8
 
 
+def _turn(e1, e2) -> np.ndarray:
+    """Signed turning angles from edge vectors e1 to e2 ((..., 2) arrays; positive: left)."""
+    return np.arctan2(e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0],
+                      np.sum(e1 * e2, axis=-1))
+
+
 def _turns(p2: np.ndarray) -> np.ndarray:
     """(n,) signed turning angle at each corner of the 2-d polygon p2 (n, 2) (positive:
     left turn, convex for a counter-clockwise polygon)."""
-    e1 = p2 - np.roll(p2, 1, axis=0)
-    e2 = np.roll(p2, -1, axis=0) - p2
-    cross = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    return np.arctan2(cross, np.sum(e1 * e2, axis=1))
+    return _turn(p2 - np.roll(p2, 1, axis=0), np.roll(p2, -1, axis=0) - p2)
+
+
+def _angles(p2: np.ndarray) -> np.ndarray:
+    """(n,) interior angles (radians, in (0, 2 pi)) of the counter-clockwise polygon p2."""
+    return math.pi - _turns(p2)
 
 
 def concave_faces(x, sizes, flat) -> np.ndarray:
@@ -77,18 +85,13 @@ def concave_faces(x, sizes, flat) -> np.ndarray:
     if not (sizes >= MIN_CORNERS).any():  # triangle and quad meshes: nothing to look at
         return np.zeros(F, dtype=bool)
     cf = np.repeat(np.arange(F), sizes)
-    nxt = flat[corner_successors(sizes)]
-    first = np.r_[0, np.cumsum(sizes)[:-1]]
-    base = x[flat[first[cf]]]  # relative to each face's first corner: no cancellation far
-    p, q = x[flat] - base, x[nxt] - base  # from the origin (a review: 63 degrees off at 5e6)
-    normal = np.zeros((F, 3))
-    np.add.at(normal, cf, np.cross(p, q))
-    length = np.linalg.norm(normal, axis=1)
+    nxt = corner_successors(sizes)
+    prv = np.empty_like(nxt)
+    prv[nxt] = np.arange(len(nxt))
+    normal = face_vector_areas(x, sizes, flat)  # (about each face's first corner: far from
+    length = np.linalg.norm(normal, axis=1)  # the origin a review saw it 63 degrees off)
     normal /= np.where(length > 0, length, 1.0)[:, None]
-    prv_corner = np.arange(len(flat)) - 1
-    prv_corner[first] += sizes  # the first corner's predecessor is the face's last
-    e1 = p - (x[flat[prv_corner]] - base)
-    e2 = q - p
+    e1, e2 = x[flat] - x[flat[prv]], x[flat[nxt]] - x[flat]
     turn = np.arctan2(np.einsum("ij,ij->i", np.cross(e1, e2), normal[cf]),
                       np.einsum("ij,ij->i", e1, e2))
     back = np.zeros(F)  # the face's total turning back
@@ -147,10 +150,7 @@ def _diagonals(P: np.ndarray, i: int) -> np.ndarray:
 def _interior(prev, at, nxt) -> np.ndarray:
     """Interior angles (radians, in (0, 2 pi)) at corners `at` of counter-clockwise
     polygons, between their neighbours `prev` and `nxt` ((..., 2) arrays)."""
-    e1, e2 = at - prev, nxt - at
-    turn = np.arctan2(e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0],
-                      np.sum(e1 * e2, axis=-1))
-    return math.pi - turn
+    return math.pi - _turn(at - prev, nxt - at)
 
 
 def _best_cut(P: np.ndarray, wide, taken=frozenset()) -> tuple | None:
@@ -161,7 +161,7 @@ def _best_cut(P: np.ndarray, wide, taken=frozenset()) -> tuple | None:
     i < j, that may not be cut (edges the mesh has already). None where no diagonal exists
     (P not simple). Vectorized over j: O(len(wide) m^2) for m corners."""
     m = len(P)
-    here = _interior(np.roll(P, 1, axis=0), P, np.roll(P, -1, axis=0)) > LIMIT
+    here = _angles(P) > LIMIT
     cuts, keys = [], []
     for i in wide:
         j = np.flatnonzero(_diagonals(P, i))
@@ -194,15 +194,14 @@ def _teeth(P: np.ndarray, taken) -> list:
     polygon P (m, 2) that cut off a convex "tooth" a, a + 1, ..., b (the teeth of a gear, the
     points of a star), each a diagonal not in `taken`."""
     m = len(P)
-    angle = math.pi - _turns(P)
-    reflex = np.flatnonzero(angle > math.pi + REFLEX / 10).tolist()
+    reflex = np.flatnonzero(_angles(P) > math.pi + REFLEX / 10).tolist()
     cuts = []
     for a, b in zip(reflex, reflex[1:] + reflex[:1]):
         if (b - a) % m < 2 or a == b or (min(a, b), max(a, b)) in taken \
                 or not _diagonals(P, a)[b]:
             continue
         tooth = [k % m for k in range(a, a + (b - a) % m + 1)]
-        if (math.pi - _turns(P[tooth]) < LIMIT).all():
+        if (_angles(P[tooth]) < LIMIT).all():
             cuts.append((a, b))
     return cuts
 
@@ -231,14 +230,14 @@ def convex_pieces(p2: np.ndarray, taken=frozenset()) -> list:
     while todo:
         poly = todo.pop()
         P = p2[poly]
-        wide = np.flatnonzero(math.pi - _turns(P) > LIMIT).tolist()
+        angle = _angles(P)
+        wide = np.flatnonzero(angle > LIMIT).tolist()
         if not wide or len(poly) == 3:  # (a triangle is convex: a near-straight one stays)
             out.append(poly)
             continue
         if len(wide) > CANDIDATES:  # the widest (ties by corner order): O(m^2) a cut
-            angle = (math.pi - _turns(P))[wide]
-            wide = [k for k, a in zip(wide, angle)
-                    if a >= np.sort(angle)[-CANDIDATES] - _TIE][:CANDIDATES]
+            cut_at = np.sort(angle[wide])[-CANDIDATES] - _TIE
+            wide = [k for k in wide if angle[k] >= cut_at][:CANDIDATES]
         where = {c: k for k, c in enumerate(poly)}
         cut = _best_cut(P, wide, frozenset((min(where[a], where[b]), max(where[a], where[b]))
                                            for a, b in taken if a in where and b in where))
