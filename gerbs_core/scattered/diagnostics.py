@@ -17,7 +17,7 @@ from ..errors import InvalidParameterError
 from ..inputs import integer, real_array
 
 from .covers import in_convex_polygon
-from .triangulation import simplicialization
+from .triangulation import delaunay_simplices
 
 __all__ = ["sample_domain", "cover_report"]
 
@@ -41,7 +41,7 @@ def sample_domain(interp, resolution=6, seed=0):
         x = np.sort(pts[:, 0])
         t = np.linspace(0, 1, resolution + 1)
         return (x[:-1, None] + np.diff(x)[:, None] * t).reshape(-1, 1)
-    simp = interp.simplices if hasattr(interp, "simplices") else simplicialization(pts)
+    simp = interp.simplices if hasattr(interp, "simplices") else delaunay_simplices(pts)
     if simp is None:
         raise InvalidParameterError("samples", "Qhull finds the points degenerate: no simplices "
                                     "to sample the domain in; pass samples")

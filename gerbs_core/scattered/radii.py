@@ -35,7 +35,7 @@ from ..errors import InvalidParameterError, InvalidPointSetError
 from ..inputs import real_array
 from .cover_check import certify_cover
 from .metrics import QuasiNorm
-from .triangulation import simplicialization as delaunay_simplices
+from .triangulation import delaunay_simplices
 
 __all__ = ["check_points", "check_extent", "nearest_distances", "auto_rho", "auto_R",
            "validate_radii", "simplicialization", "EXTENT_RANGE", "MARGIN"]

@@ -26,7 +26,7 @@ from scipy.spatial import Delaunay, QhullError
 
 from ..errors import InvalidPointSetError
 
-__all__ = ["Triangulation", "delaunay", "normalizing_map", "simplicialization"]
+__all__ = ["Triangulation", "delaunay", "normalizing_map", "delaunay_simplices"]
 
 
 def normalizing_map(points):
@@ -122,7 +122,7 @@ def delaunay(points) -> Triangulation:
     return Triangulation(points, tri, c, s)
 
 
-def simplicialization(points):
+def delaunay_simplices(points):
     """Delaunay simplices (T, n+1) of points (N, n), 2 <= n, normalised as :func:`delaunay`;
     None when Qhull fails."""
     try:
