@@ -95,8 +95,9 @@ def parse_args(argv):
                         "mesh stays flat) or straighten (the border runs smoothly through "
                         "its vertices, corners rounded) (default keep)")
     p.add_argument("--shading", default="smooth", choices=("smooth", "keep"),
-                   help="smooth: every output face smooth shaded (the surface is smooth; "
-                        "what a viewer shows then follows its vertex normals); keep: each "
+                   help="smooth: every output face smooth shaded and no edge sharp but "
+                        "the fully creased ones (the surface is smooth; what a viewer shows "
+                        "then follows its vertex normals); keep: each "
                         "output face shaded like the input face it lies in, as the modifier "
                         "does in Blender (an OBJ with 's 0' and no normals, like the bundled "
                         "sample: flat, faceted; Blender's OBJ importer shades every face of "
@@ -469,6 +470,32 @@ def mark_creases(bpy, obj, angle=None, sharp=False, normals=None) -> int:
     return int(full.sum())
 
 
+def shade_smooth(obj) -> None:
+    """``--shading smooth`` on the imported copy (never the file): every face smooth and
+    no edge sharp but the fully creased ones (``crease_edge`` = 1, where the surface has a
+    crease: its normals split there). A flat-shaded file's look would otherwise reach the
+    output: its faces' flat shading ("s 0"), and the sharp edges Blender's importers mark
+    between faces whose normals differ (an OBJ written flat with its normals: 961 of the
+    Monkey's 1,005 edges), which the modifier carries onto the output's edges, splitting
+    its normals along every cage edge."""
+    import numpy as np
+    mesh = obj.data
+    mesh.shade_smooth()
+    E = len(mesh.edges)
+    crease = mesh.attributes.get("crease_edge")
+    full = np.zeros(E, bool) if crease is None else \
+        _get(crease.data, "value", E, np.float32) >= 1.0
+    flag = mesh.attributes.get("sharp_edge")
+    if not full.any():
+        if flag is not None:
+            mesh.attributes.remove(flag)
+        return
+    if flag is None:
+        flag = mesh.attributes.new("sharp_edge", "BOOLEAN", "EDGE")
+    flag.data.foreach_set("value", full)
+    mesh.update()
+
+
 # --- export ---------------------------------------------------------------------
 
 @contextlib.contextmanager
@@ -556,9 +583,7 @@ def run(args, src: Path, out: Path, protected) -> None:
                 if not args.quiet or seams:
                     print(f"{obj.name}: {n} edges creased{seams}", file=sys.stderr)
             if args.shading == "smooth":
-                # the imported copy, never the file: its faces' flat shading ("s 0", a
-                # flat-shaded export) would otherwise reach every output face
-                obj.data.shade_smooth()
+                shade_smooth(obj)
             if not args.quiet:
                 print(f"{obj.name}: {len(obj.data.vertices)} vertices, "
                       f"{len(obj.data.polygons)} faces", file=sys.stderr)

@@ -45,6 +45,38 @@ def test_a_flat_shaded_input_gives_a_smooth_shaded_surface_unless_kept(tmp_path)
     assert SAMPLE.read_text().count("s 0") == 1                # the input is not written
 
 
+def test_a_flat_export_with_normals_gives_smooth_normals_unless_creased(blender, tmp_path):
+    """Blender's Monkey written flat with its normals (a newcomer's walk, 2026-12-07): the
+    OBJ importer marks the edges between faces of different normals sharp (961 of 1,005),
+    and the modifier carried them onto the output, splitting its normals along every cage
+    edge (12,170 normals for 7,830 points). --shading smooth clears them; a full crease
+    stays sharp, where the surface has its crease."""
+    import bpy
+    bpy.ops.mesh.primitive_monkey_add()
+    src = tmp_path / "monkey.obj"
+    bpy.ops.wm.obj_export(filepath=str(src), export_normals=True, export_smooth_groups=False,
+                          export_materials=False)
+    text = src.read_text().splitlines()
+    assert sum(x.startswith("vn ") for x in text) > 400            # one normal per face
+    out = run(src, "-o", tmp_path / "s.obj", "--resolution", "2", "--quiet", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    groups, nv, nn = shading(tmp_path / "s.obj")
+    assert groups == {"s 1"} and nn == nv, (nn, nv)                 # one normal per point
+    # a fully creased edge keeps its normals split (the cube's 12 edges at 60 degrees)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.mesh.primitive_cube_add(size=2.0)
+    cube = tmp_path / "cube.obj"
+    bpy.ops.wm.obj_export(filepath=str(cube), export_normals=True, export_materials=False)
+    out = run(cube, "-o", tmp_path / "c.obj", "--resolution", "2", "--quiet",
+              "--crease-angle", "60", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    groups, nv, nn = shading(tmp_path / "c.obj")
+    # 26 points (8 corners, 12 edge midpoints, 6 face centres), every face flat: with its
+    # normals split at the creases the exporter writes the faces' 6 distinct normals (26,
+    # one per point, if the creases were shaded smooth)
+    assert nv == 26 and nn == 6, (nv, nn)
+
+
 def test_the_wrong_python_gets_one_error_line_naming_the_environment(tmp_path):
     # -S: no site-packages, so no bpy (as a system Python without the project's environment)
     out = run(cwd=tmp_path, python=(sys.executable, "-S"))
