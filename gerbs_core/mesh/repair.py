@@ -66,7 +66,7 @@ from . import repair_faces as rf
 from . import repair_sheets as rs
 from .selection import selection_matrix
 from .topology import MeshTopology, _parse_faces
-from .validation import check_finite, corner_successors, validate_geometry
+from .validation import check_finite, check_outliers, corner_successors, validate_geometry
 
 __all__ = ["MeshWarning", "RepairedMesh", "repair_mesh"]
 
@@ -289,6 +289,8 @@ def repair_mesh(vertices, faces, *, merge_distance=None, rest_positions=None,
     sizes, flat, origin = rf.clean_faces(sizes0, rep[flat0], np.arange(len(sizes0)), sizes0,
                                          rf.input_repeats(sizes0, flat0), notes)
     if len(sizes):
+        # a stray coordinate first: its faces would otherwise pass for zero-area ones below
+        check_outliers(G, rf.unique_edges(sizes, flat, V))
         sizes, flat, origin = rf.merge_zero_area(G, sizes, flat, origin, rtol, notes)
         sizes, flat, origin = rc.split_concave(G, sizes, flat, origin, notes)
     if not len(sizes):

@@ -20,7 +20,9 @@ __all__ = ["weld_map", "clean_faces", "merge_zero_area"]
 COLLINEAR_RTOL = 1e-8  # corners within 1e-8 of the longest edge from one line are collinear
 
 
-def _unique_edges(sizes, flat, V):
+def unique_edges(sizes, flat, V):
+    """(E, 2) the edges (lo, hi) of CSR faces (corner counts ``sizes``, vertices ``flat``),
+    each once, ascending; none between a vertex and itself."""
     nxt = corner_successors(sizes)
     lo, hi = np.minimum(flat, flat[nxt]), np.maximum(flat, flat[nxt])
     keys = np.unique(lo[lo != hi] * V + hi[lo != hi])
@@ -39,7 +41,7 @@ def weld_map(x, sizes, flat, merge_distance, rtol, notes):
     from scipy.sparse.csgraph import connected_components
 
     V = len(x)
-    e = _unique_edges(sizes, flat, V)
+    e = unique_edges(sizes, flat, V)
     pairs = [np.zeros((0, 2), dtype=np.int64)]
     if len(e):
         length = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)

@@ -21,7 +21,7 @@ from .topology_build import edge_error
 
 __all__ = ["validate_geometry", "flat_faces", "chain_faces", "not_a_polygon", "face_vector_areas",
            "corner_successors",
-           "check_finite", "OUTLIER_FACTOR"]
+           "check_finite", "check_outliers", "OUTLIER_FACTOR"]
 
 # A vertex whose shortest edge is 1e6 median edge lengths away is a stray coordinate,
 # not a feature: at that scale ratio float64 keeps only ~10 digits of the rest of the
@@ -60,17 +60,7 @@ def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12,
         x = np.concatenate([x, np.zeros((len(x), 1))], 1)
     check_finite(x)
     e = topology.edges
-    length = np.linalg.norm(x[e[:, 1]] - x[e[:, 0]], axis=1)
-    scale = float(np.median(length))
-    shortest = np.full(topology.n_vertices, np.inf)
-    np.minimum.at(shortest, e[:, 0], length)
-    np.minimum.at(shortest, e[:, 1], length)
-    far = (shortest > OUTLIER_FACTOR * scale) & (scale > 0)
-    if far.any():
-        raise InvalidMeshError("outlier_vertex", f"outlier_vertex: every edge of these vertices "
-                               f"is more than {OUTLIER_FACTOR:g} times the median edge length "
-                               f"{scale:.3g} (a stray coordinate?); vertices",
-                               np.flatnonzero(far), "vertex")
+    length, scale = check_outliers(x, e)
     short = length <= rtol * scale
     if short.any():
         raise edge_error("zero_length_edge", f"have length <= {rtol:g} * the median edge length",
@@ -79,6 +69,28 @@ def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12,
     if flat.any():
         raise InvalidMeshError("degenerate_face", "degenerate_face: zero area (collinear "
                                "corners) in faces", np.flatnonzero(flat), "face")
+
+
+def check_outliers(x, edges) -> tuple[np.ndarray, float]:
+    """Raise ``outlier_vertex`` for the vertices of x (V, 3) whose edges (``edges`` (E, 2),
+    each once) are all longer than ``OUTLIER_FACTOR`` times the median edge length; else
+    return (the edges' lengths (E,), that median). Checked before the repairs too
+    (:func:`gerbs_core.mesh.repair.repair_mesh`): next to a vertex 1e14 away its faces'
+    areas vanish to the rounding, and the zero-area repair dropped them silently (a
+    newcomer's walk: Blender stores ``co.x = inf`` as 3.4e38)."""
+    length = np.linalg.norm(x[edges[:, 1]] - x[edges[:, 0]], axis=1)
+    scale = float(np.median(length)) if len(length) else 0.0
+    shortest = np.full(len(x), np.inf)
+    np.minimum.at(shortest, edges[:, 0], length)
+    np.minimum.at(shortest, edges[:, 1], length)
+    # (a vertex in no edge, loose or welded away, is no outlier: its shortest stays inf)
+    far = (shortest > OUTLIER_FACTOR * scale) & np.isfinite(shortest) & (scale > 0)
+    if far.any():
+        raise InvalidMeshError("outlier_vertex", f"outlier_vertex: every edge of these vertices "
+                               f"is more than {OUTLIER_FACTOR:g} times the median edge length "
+                               f"{scale:.3g} (a stray coordinate?); vertices",
+                               np.flatnonzero(far), "vertex")
+    return length, scale
 
 
 def check_finite(x, name: str = "vertices") -> None:

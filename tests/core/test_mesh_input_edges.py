@@ -78,6 +78,23 @@ def test_a_stray_coordinate_is_an_outlier_vertex():
     assert exc.value.problem == "outlier_vertex" and 4 in exc.value.indices
 
 
+@pytest.mark.parametrize("far", [1e8, 1e14, 1e20, 3.4e38])
+def test_a_stray_coordinate_is_refused_before_its_faces_pass_for_zero_area(far):
+    """A newcomer's walk (2026-12-07): from 1e14 on, the faces of a Cube vertex thrown far
+    away have no area to the rounding, the zero-area repair dropped them and the surface of
+    the rest was built with warnings only (Blender stores ``co.x = inf`` as 3.4e38)."""
+    from gerbs_core.mesh import BlendingSurface
+    V, F = P.cube()
+    V = V.copy()
+    V[7, 0] = far
+    with pytest.raises(InvalidMeshError, match="outlier_vertex") as exc:
+        BlendingSurface(V, F)
+    assert exc.value.problem == "outlier_vertex" and list(exc.value.indices) == [7]
+    # a loose vertex that far is in no face: ignored, as every loose vertex
+    L = np.concatenate([P.cube()[0], [[far, 0.0, 0.0]]])
+    assert [w.tag for w in BlendingSurface(L, F).warnings] == ["unused_vertex"]
+
+
 def _moebius(n=12):
     """A Moebius strip of n quads (one-sided: no consistent orientation)."""
     t = 2 * np.pi * np.arange(n) / n
