@@ -65,6 +65,7 @@ def thin_part_warning(cage, surface_points):
         f"the surface reaches {ratio:.1f}x the cage's extent along {'xyz'[k]} (the mesh's "
         f"own axes): where faces "
         f"are much longer than the part is thick (a board, a coin, a tower), the local "
-        f"functions cannot turn 90 degrees within them; bevelling the edges (2-3 segments) "
-        f"keeps the surface near the cage",
+        f"functions cannot turn 90 degrees within them; bevelling the edges (2-3 segments; in "
+        f"Blender a Bevel modifier above this one in the stack) keeps the surface near the "
+        f"cage",
         (), "face")

@@ -134,8 +134,10 @@ def test_the_warning_line_selects_what_the_repair_changed(blender):
 def test_a_thin_part_warns_in_the_panel_with_nothing_to_select(blender):
     """Blender's Cube scaled to a 2 x 2 x 0.2 board and the scale applied: the surface
     bulges to 3.3x the board's thickness (a known limit); the warning line says so and what
-    helps, the Select button is not offered (the warning names no element), and a Bevel
-    modifier below the cage's edges (2 segments) clears it."""
+    helps, where in the stack (a newcomer's walk: the README said "below GERBS", where a
+    Bevel rounds GERBS's output and the board stays at 3.3x), the Select button is not
+    offered (the warning names no element), and a Bevel modifier above GERBS (2 segments)
+    clears it."""
     from blender_addon import api, panels
 
     bpy.ops.mesh.primitive_cube_add()
@@ -147,6 +149,7 @@ def test_a_thin_part_warns_in_the_panel_with_nothing_to_select(blender):
     assert status["error"] == ""
     assert "3.3x the cage's extent along z" in status["warning"]
     assert "bevelling the edges" in status["warning"]
+    assert "Bevel modifier above this one in the stack" in status["warning"]
     rows = panels.panel_rows(obj, mod, width_px=400.0)
     assert rows["warning"] and not rows["select"]
     assert [w.type for w in mod.node_warnings] == ["WARNING"]
