@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import engine, handlers, ids, linked
+from . import engine, handlers, ids, linked, stack
 from . import geometry_nodes as gn
 from . import settings as settings_mod
 from .errors import GERBSSyncError, NoModifierError, OperationError, operator_message
@@ -193,7 +193,9 @@ def status(obj, mod=None) -> dict:
     """Counts, timings, the last error and the warning line of a modifier (for panels and
     scripts); ``warnings``: the repairs of the mesh (gerbs_core MeshWarning records);
     ``render_error``: why the last final render's build failed ("" none; its renders show
-    the input meanwhile)."""
+    the input meanwhile); ``stale``: True while the viewport shows the base mesh without an
+    error (the surface is out of date: Live Update off and the mesh or a setting edited;
+    Rebuild makes it); the other counts are then those of the last build."""
     mod = _modifier(obj, mod)
     st = engine.get_state(obj, mod)
     error = gn.get_error(mod)
@@ -201,6 +203,11 @@ def status(obj, mod=None) -> dict:
         error = st.error
     out = {"error": error, "warning": gn.get_warning(mod),
            "render_error": gn.get_render_error(mod)}
+    # out of date: no error, yet the viewport shows the base mesh (Live Update off and the
+    # mesh or a setting edited; a newcomer's walk found status reporting the old surface)
+    layer = bpy.context.view_layer
+    shows = None if layer is None else stack.shows_input(obj, mod, layer.depsgraph)
+    out["stale"] = bool(shows) and not error
     if st is not None and not st.error:
         out.update(points=st.n_points, faces=st.n_faces, triangles=st.n_triangles,
                    warnings=st.warnings,

@@ -64,6 +64,9 @@ def panel_rows(obj, mod, width_px: float = 300.0, scale: float = 1.0) -> dict:
         out["error"] = problems.wrap(f"Final render: {problems.headline(info['render_error'])} "
                                      f"Renders show the mesh without the surface until it "
                                      f"builds.", width_px, scale)
+    elif info["stale"]:  # Live Update off and the mesh or a setting edited
+        out["warning"] = problems.wrap("The surface is out of date: the base mesh shows. "
+                                       "Press Rebuild, or turn Live Update on.", width_px, scale)
     elif info["warning"]:  # what the mesh repair changed
         out["warning"] = problems.wrap(problems.headline(info["warning"]), width_px, scale)
         # a warning naming no element (fairing_skipped, thin_part) has nothing to select

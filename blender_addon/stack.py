@@ -77,6 +77,23 @@ def _channel_vectors(final, name):
     return out
 
 
+def shows_input(obj, mod, depsgraph) -> bool | None:
+    """In `depsgraph`'s last evaluation, did `mod` pass its input on (the base mesh shows:
+    an error, or a surface out of date, e.g. with Live Update off)? True / False where the
+    final mesh can tell (only deform-only modifiers after GERBS, which keep the channel the
+    node group writes when it passes its input on), None where it cannot (a modifier after
+    GERBS that makes new geometry, the modifier not evaluated). Reads one attribute's
+    presence; writes nothing, forces no evaluation."""
+    st = stack_of(obj, mod, depsgraph.mode == "RENDER")
+    if not st.enabled or not st.deform_after:
+        return None
+    obj_eval = obj.evaluated_get(depsgraph)
+    if not obj_eval.is_evaluated or st.edit:
+        return None
+    attr = obj_eval.data.attributes.get(ids.CHANNEL_POSITION)
+    return attr is not None and attr.domain == "POINT"
+
+
 def _read_final(final, groups, use_normals, known, record):
     """The input from the channel on the final mesh: FRESH where it has none; None where
     it lacks the normals asked for (evaluated with other settings than those read)."""

@@ -344,12 +344,19 @@ def test_live_update_off_says_so_and_turning_it_on_syncs_the_edits(blender):
     X = positions(obj.data)
     assert np.array_equal(evaluated(obj), X)                       # the base mesh
     assert "Live Update" in warnings(obj)[0][1]
-    notes = " ".join(" ".join(n) for n in panels.panel_rows(obj, api.get_modifier(obj), 600)["notes"])
+    rows = panels.panel_rows(obj, api.get_modifier(obj), 600)
+    notes = " ".join(" ".join(n) for n in rows["notes"])
     assert "Live Update is off" in notes
+    # and scripts and the panel's warning line say the surface is out of date (a newcomer's
+    # walk: status reported the last build's points with no warning)
+    assert api.status(obj)["stale"] and api.status(obj)["error"] == ""
+    assert "out of date" in " ".join(rows["warning"]) and not rows["select"]
     scene.gerbs.live_update = True
     bpy.context.view_layer.update()
     offsets, corners = topology(obj.data)
     P = evaluated(obj)
     assert len(P) > len(X) and np.abs(P - fresh_surface(X, offsets, corners, 2)).max() <= 1e-5
-    notes = " ".join(" ".join(n) for n in panels.panel_rows(obj, api.get_modifier(obj), 600)["notes"])
+    rows = panels.panel_rows(obj, api.get_modifier(obj), 600)
+    notes = " ".join(" ".join(n) for n in rows["notes"])
     assert "Live Update is off" not in notes
+    assert not api.status(obj)["stale"] and rows["warning"] == []
