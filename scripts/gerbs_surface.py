@@ -238,6 +238,22 @@ def gltf_references(path: Path) -> list[Path]:
     return refs
 
 
+def obj_references(path: Path) -> list[Path]:
+    """The material libraries an OBJ input names (``mtllib``, relative to its folder), so
+    that an OBJ output's own .mtl never replaces one of them."""
+    refs = []
+    try:
+        with open(path, "rb") as f:
+            for line in f:
+                if line.startswith(b"mtllib"):
+                    name = line[6:].strip().decode("utf-8", "replace")
+                    if name:
+                        refs.append((path.parent / name).resolve())
+    except OSError:
+        pass  # unreadable: the importer says so
+    return refs
+
+
 # --- import ---------------------------------------------------------------------
 
 def import_mesh(bpy, path: Path):
@@ -534,8 +550,11 @@ def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -
         ext = out.suffix.lower()
         with _stdout_silenced():
             if ext == ".obj":
+                # materials in a .mtl beside it, where the input has any (as .glb keeps
+                # them; a newcomer's walk found them dropped)
                 bpy.ops.wm.obj_export(filepath=str(target), export_selected_objects=True,
-                                      apply_modifiers=True, export_materials=False)
+                                      apply_modifiers=True, export_materials=any(
+                                          len(o.data.materials) for o in objects))
             else:
                 bpy.ops.export_scene.gltf(filepath=str(target), use_selection=True,
                                           export_apply=True,
@@ -626,7 +645,8 @@ def main(argv=None) -> int:
         args = parse_args(sys.argv[1:] if argv is None else argv)
         src, out = check_paths(args)
         gltf = src.suffix.lower() in (".gltf", ".glb")
-        protected = [src] + (gltf_references(src) if gltf else [])
+        protected = [src] + (gltf_references(src) if gltf else
+                             obj_references(src) if src.suffix.lower() == ".obj" else [])
         if any(_same_file(out, p) for p in protected if p.exists()):
             raise UserError(f"output {args.output} is a file the input uses; choose another name")
         existed = out.exists()   # said below: cube.obj and cube.stl share a default name

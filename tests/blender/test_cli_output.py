@@ -77,6 +77,48 @@ def test_a_flat_export_with_normals_gives_smooth_normals_unless_creased(blender,
     assert nv == 26 and nn == 6, (nv, nn)
 
 
+def test_an_obj_output_keeps_the_materials_in_its_own_mtl(blender, tmp_path):
+    """A newcomer's walk (2026-12-07): the .obj output dropped the materials a .glb keeps
+    (the exporter ran with export_materials=False). Now a .mtl beside it carries them, only
+    where the input has materials, and never replaces a library the input names."""
+    import bpy
+    bpy.ops.mesh.primitive_cube_add()
+    cube = bpy.context.object
+    for name in ("Grey", "Red"):
+        cube.data.materials.append(bpy.data.materials.new(name))
+    cube.data.polygons[2].material_index = 1
+    src = tmp_path / "mat.obj"
+    bpy.ops.wm.obj_export(filepath=str(src))
+    out = run(src, "-o", tmp_path / "m.obj", "--resolution", "2", "--quiet", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    text = (tmp_path / "m.obj").read_text().splitlines()
+    assert "mtllib m.mtl" in text and {"usemtl Grey", "usemtl Red"} <= set(text)
+    assert "newmtl Red" in (tmp_path / "m.mtl").read_text()
+    # the Red face's 4 output quads at r = 2, the Grey faces' 20
+    faces = {}
+    current = None
+    for line in text:
+        if line.startswith("usemtl "):
+            current = line.split()[1]
+        elif line.startswith("f "):
+            faces[current] = faces.get(current, 0) + 1
+    assert faces == {"Grey": 20, "Red": 4}, faces
+    # an output whose .mtl would replace the input's library is refused before writing
+    (tmp_path / "lib").mkdir()
+    src2 = tmp_path / "lib" / "part.obj"
+    src2.write_text(src.read_text().replace("mtllib mat.mtl", "mtllib shared.mtl"))
+    (tmp_path / "lib" / "shared.mtl").write_text((tmp_path / "mat.mtl").read_text())
+    before = (tmp_path / "lib" / "shared.mtl").read_text()
+    out = run(src2, "-o", tmp_path / "lib" / "shared.obj", "--resolution", "2", "--quiet",
+              cwd=tmp_path)
+    assert out.returncode == 2 and "would replace shared.mtl" in out.stderr, out.stderr
+    assert (tmp_path / "lib" / "shared.mtl").read_text() == before
+    assert not (tmp_path / "lib" / "shared.obj").exists()
+    # no materials: no .mtl
+    out = run(SAMPLE, "-o", tmp_path / "s.obj", "--resolution", "2", "--quiet", cwd=tmp_path)
+    assert out.returncode == 0 and not (tmp_path / "s.mtl").exists()
+
+
 def test_the_wrong_python_gets_one_error_line_naming_the_environment(tmp_path):
     # -S: no site-packages, so no bpy (as a system Python without the project's environment)
     out = run(cwd=tmp_path, python=(sys.executable, "-S"))
