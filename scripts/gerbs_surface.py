@@ -176,6 +176,8 @@ def check_paths(args) -> tuple[Path, Path]:
     src, out = _absolute(args.input), _absolute(args.output)
     if src.suffix.lower() not in INPUTS:
         raise UserError(f"input must be one of {', '.join(INPUTS)}, got {args.input.name}")
+    if out.is_dir():  # before the suffix: "-o ." named no file at all
+        raise UserError(f"output {args.output} is a directory; give a file name")
     if out.suffix.lower() not in OUTPUTS:
         raise UserError(f"output must be one of {', '.join(OUTPUTS)}, got {args.output.name}")
     if not src.exists():
@@ -186,8 +188,6 @@ def check_paths(args) -> tuple[Path, Path]:
         raise UserError(f"input file {args.input} is empty")
     if _same_file(src, out):
         raise UserError(f"output {args.output} is the input file; choose another name")
-    if out.is_dir():
-        raise UserError(f"output {args.output} is a directory; give a file name")
     ancestor = out.parent
     while not ancestor.exists():
         ancestor = ancestor.parent
@@ -531,6 +531,13 @@ def _stdout_silenced():
         os.close(saved)
 
 
+def sidecars(out: Path) -> list[Path]:
+    """The files an output may write beside itself: a .gltf's buffer (.bin), an .obj's
+    material library (.mtl)."""
+    side = {".gltf": ".bin", ".obj": ".mtl"}.get(out.suffix.lower())
+    return [] if side is None else [out.with_suffix(side)]
+
+
 def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -> None:
     """Export into a temporary folder beside `out`, then rename every file into
     place (sidecars first); refuse if one would replace a `protected` file. The folder
@@ -649,6 +656,10 @@ def main(argv=None) -> int:
                              obj_references(src) if src.suffix.lower() == ".obj" else [])
         if any(_same_file(out, p) for p in protected if p.exists()):
             raise UserError(f"output {args.output} is a file the input uses; choose another name")
+        for side in sidecars(out):  # said before the build (export_mesh checks again)
+            if any(_same_file(side, p) for p in protected if p.exists()):
+                raise UserError(f"writing {out.name} would replace {side.name}, which the "
+                                f"input uses; choose another output name or folder")
         existed = out.exists()   # said below: cube.obj and cube.stl share a default name
         run(args, src, out, protected)
     except UserError as exc:

@@ -112,6 +112,7 @@ def test_an_obj_output_keeps_the_materials_in_its_own_mtl(blender, tmp_path):
     out = run(src2, "-o", tmp_path / "lib" / "shared.obj", "--resolution", "2", "--quiet",
               cwd=tmp_path)
     assert out.returncode == 2 and "would replace shared.mtl" in out.stderr, out.stderr
+    assert "warning" not in out.stderr      # said before the build, not after its lines
     assert (tmp_path / "lib" / "shared.mtl").read_text() == before
     assert not (tmp_path / "lib" / "shared.obj").exists()
     # no materials: no .mtl

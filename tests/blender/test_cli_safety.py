@@ -210,6 +210,7 @@ HUGE_CUBE = "".join(f"v {x} {y} {z}\n" for x in (-3e38, 3e38) for y in (-3e38, 3
 
 @pytest.mark.parametrize("case,words", [
     ("output is a directory", ["directory"]),
+    ("output is .", ["output . is a directory"]),   # said "got " with an empty name
     ("parent is a file", ["not a directory"]),
     ("missing input", ["does not exist"]),
     ("input is a directory", ["not a file"]),
@@ -236,6 +237,8 @@ def test_every_user_error_is_one_line_and_exit_2_with_nothing_written(tmp_path, 
     args = [good, "-o", target]
     if case == "output is a directory":
         target.mkdir()
+    elif case == "output is .":
+        args[2] = "."
     elif case == "parent is a file":
         (tmp_path / "file.txt").write_text("x")
         args = [good, "-o", tmp_path / "file.txt" / "o.glb"]
