@@ -12,7 +12,9 @@ Settings (keywords, see ``ids.SETTINGS`` and ``settings.validate``): kernel
 ("erbs", "bfbs", "logistic", "affine"), alpha, beta, gamma, lam, sigma (ERBS),
 bfbs_left, bfbs_right, resolution (segments per edge in the viewport, Apply and
 exports, 1..64), render_resolution (in final renders), boundary ("keep",
-"straighten"), rest ("follow", "bound"), use_normals, memory_budget (bytes).
+"straighten"), rest ("follow", "bound"), use_normals, merge (weld vertices closer than
+merge_distance before building: both are needed, merge_distance alone welds nothing),
+merge_distance (object units, 0: coincident vertices only), memory_budget (bytes).
 
 Errors (all ``gerbs_core.errors.GERBSError``):
 
