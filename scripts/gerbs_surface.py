@@ -621,9 +621,10 @@ def run(args, src: Path, out: Path, protected) -> None:
             for warning in info.get("warnings", ()):  # repairs: reported, not errors
                 print(f"warning: {obj.name}: {cli_words(warning.message)}", file=sys.stderr)
             if not args.quiet:
-                print(f"{obj.name}: surface with {info['points']} points, "
-                      f"{info['triangles']} triangles in {info['build_seconds']:.2f} s",
-                      file=sys.stderr)
+                # faces as written (quads in quads), and the triangles they make
+                print(f"{obj.name}: surface with {info['points']} points, {info['faces']} "
+                      f"faces ({info['triangles']} triangles) in "
+                      f"{info['build_seconds']:.2f} s", file=sys.stderr)
         bpy.context.view_layer.update()
         rounding = obj_rounding(bpy, objects) if out.suffix.lower() == ".obj" else ""
         if rounding:
