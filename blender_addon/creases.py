@@ -62,10 +62,27 @@ def _pack(pairs, edge_w, vert_w) -> Creases:
                    np.ascontiguousarray(edge_w[keep], dtype=np.float32), vertex)
 
 
-def from_carried(carried) -> Creases:
+def _face_edges(offsets, corners, pairs) -> np.ndarray:
+    """(K,) bool: which vertex pairs (K, 2) are edges of a face (CSR faces)."""
+    offsets = np.asarray(offsets, dtype=np.int64)
+    a = np.asarray(corners, dtype=np.int64)
+    p = np.asarray(pairs, dtype=np.int64)
+    nxt = np.arange(1, len(a) + 1)
+    nxt[offsets[1:] - 1] = offsets[:-1]                 # each face's last corner -> its first
+    b = a[nxt] if len(a) else a
+    n = int(max(a.max(initial=-1), p.max(initial=-1))) + 1
+    keys = np.minimum(a, b) * n + np.maximum(a, b)
+    return np.isin(np.minimum(p[:, 0], p[:, 1]) * n + np.maximum(p[:, 0], p[:, 1]), keys)
+
+
+def from_carried(carried, offsets=None, corners=None) -> Creases:
     """The creases among the layers the modifier receives (:class:`blender_addon.attributes.
     Carried`: read from what the stack delivers, so modifiers above GERBS that change the
-    mesh bring their creases along, and a result's record holds them too)."""
+    mesh bring their creases along, and a result's record holds them too). With the input's
+    faces (``offsets`` (F+1,), ``corners`` (C,)), the creases of loose edges (in no face:
+    not part of the surface, as their vertices are not) are left out: the core refuses
+    creases on pairs that are not edges of its faces (a stress test: Select All and Shift+E
+    on a mesh with a wire edge stopped the whole surface)."""
     if carried is None:
         return NONE
     layers = {(layer.name, layer.domain, layer.data_type): layer for layer in carried.layers
@@ -76,4 +93,6 @@ def from_carried(carried) -> Creases:
         return NONE
     pairs = np.asarray(carried.edge_verts, dtype=np.int32).reshape(-1, 2)
     edge_w = np.zeros(len(pairs), np.float32) if edge is None else edge.values[:, 0]
+    if offsets is not None and np.any(edge_w > 0.0):
+        edge_w = np.where(_face_edges(offsets, corners, pairs), edge_w, np.float32(0.0))
     return _pack(pairs, edge_w, None if vert is None else vert.values[:, 0])

@@ -289,7 +289,7 @@ def _sync(obj, mod, depsgraph, force, progress) -> SyncResult:
         _states.pop(state_key(obj, mod, True), None)  # renders rebuild too
     # creases (blender_addon/creases.py) from what the modifier receives: in the settings
     # key, so a crease change rebuilds
-    crz = creases_mod.from_carried(inp.carried)
+    crz = creases_mod.from_carried(inp.carried, inp.offsets, inp.corners)
     skey = skey + (("creases", crz.key),)
     if not render:
         _clear_stale_render_error(obj, mod, settings, crz)

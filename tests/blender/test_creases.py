@@ -49,6 +49,29 @@ def test_fully_creased_cube_stays_the_cube_like_subdivision_surface(blender):
     assert _cube_distance(evaluated(obj)).max() > 0.05
 
 
+def test_a_creased_loose_edge_is_ignored_like_the_edge(blender):
+    """A stress test (2026-12-07): a wire edge beside the Cube (in no face, so not part of
+    the surface; its vertices are unused) creased with the rest (Select All, Shift+E)
+    stopped the whole surface with "creases: [(8, 9)] are not edges of the mesh"."""
+    from blender_addon import api
+
+    bpy.ops.mesh.primitive_cube_add(size=2.0)
+    obj = bpy.context.active_object
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    a, b = bm.verts.new((2.0, 0.0, 0.0)), bm.verts.new((3.0, 0.0, 0.0))
+    bm.edges.new((a, b))
+    bm.to_mesh(obj.data)
+    bm.free()
+    obj.data.update()
+    _set_creases(obj.data, "crease_edge", "EDGE", np.ones(len(obj.data.edges)))
+    api.add_surface(obj, resolution=6)
+    status = api.status(obj)
+    assert status["error"] == "" and "unused_vertex" in status["warning"]
+    P = evaluated(obj)
+    assert len(P) == status["points"] and _cube_distance(P).max() <= 1e-6   # creased cube
+
+
 def _sphere_loop():
     bpy.ops.mesh.primitive_uv_sphere_add(segments=16, ring_count=8)
     obj = bpy.context.active_object
