@@ -323,6 +323,8 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0, 
         return None
     carried_same = (np.array_equal(st.input.materials, inp.materials)
                     and inp.carried.same(st.input.carried))
+    if snapshot.misfit(res.data, inp):
+        return None  # the record no longer fits (a layer added at resolution 1): the rebuild says so
     if st.input.same_geometry(inp) and settled:  # only what it carries changed
         st.stamp = write_carried(res, mod, st.transfer, inp, st.record)
         st.input = inp
@@ -429,8 +431,8 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
     misfit = snapshot.misfit(res.data, inp)
     if misfit:  # the record of the input (and a rest shape) must fit on the output
         return _fail(obj, mod, key, st, (
-            f"{PREFIX}resolution {resolution} gives fewer output {misfit} than the mesh has "
-            f"(loose or merged ones); raise the resolution"), progress, render=render)
+            f"{PREFIX}the output at resolution {resolution} has {misfit}; raise the "
+            f"resolution"), progress, render=render)
     # checked first (a review: a Bound mesh with loose vertices at resolution 1 failed
     # with a raw ValueError writing its rest shape on fewer output points)
     rest_mod.write(res.data, rest)  # kept with it

@@ -94,14 +94,26 @@ def _domain_sizes(mesh) -> dict:
 
 def misfit(mesh, inp: MeshInput) -> str:
     """"" when the record of `inp` fits on result `mesh` (each record uses the first
-    V / E / F / C elements of its domain, the layer table the first 4 A points), else the elements the mesh has too few of ("points, faces")."""
+    V / E / F / C elements of its domain, the layer table the first 4 A points), else what
+    the mesh has too few of and why, for a message after "the output at resolution r has":
+    "8 points, fewer than the 12 its record of the input needs (4 for each of the 3 layers
+    it carries: UV maps, vertex groups, attributes)"."""
     carried = inp.carried or Carried()
-    need = {"points": max(len(inp.positions), 4 * len(carried.layers)),
+    n_layers = len(carried.layers)
+    need = {"points": max(len(inp.positions), 4 * n_layers),
             "edges": len(carried.edge_verts), "faces": len(inp.offsets) - 1,
             "face corners": len(inp.corners)}
     have = dict(zip(need, (len(mesh.vertices), len(mesh.edges), len(mesh.polygons),
                            len(mesh.loops))))
-    return ", ".join(k for k in need if have[k] < need[k])
+    short = [k for k in need if have[k] < need[k]]
+    if not short:
+        return ""
+    why = {k: f"the mesh has {need[k]} (loose or merged ones)" for k in short}
+    if "points" in short and have["points"] < 4 * n_layers:
+        # a stress test found the layer table's need reported as loose vertices
+        why["points"] = (f"its record of the input needs {4 * n_layers} (4 for each of the "
+                         f"{n_layers} layers it carries: UV maps, vertex groups, attributes)")
+    return "; ".join(f"{have[k]} {k}, fewer than {why[k]}" for k in short)
 
 
 _FEW = 64  # up to this many changed positions are written one by one (~1 us each)

@@ -237,9 +237,31 @@ def test_more_loose_vertices_than_output_points_is_an_error_in_both_rest_modes(b
     obj.data.vertices[-1].co = (3.0, 0.0, 0.0)
     obj.data.update()
     X = positions(obj.data)
-    with pytest.raises(GERBSSyncError, match="resolution 1 gives fewer output points"):
+    with pytest.raises(GERBSSyncError, match="the output at resolution 1 has .* points, fewer than the mesh has 17"):
         api.add_surface(obj, resolution=1, rest=rest)
     assert "internal error" not in api.status(obj)["error"]
     assert np.array_equal(evaluated(obj), X) and np.array_equal(positions(obj.data), X)
     api.set_settings(obj, resolution=2)  # enough points: the surface, no error
     assert len(evaluated(obj)) > len(X) and api.status(obj)["error"] == ""
+
+
+def test_a_layer_added_at_resolution_1_that_no_longer_fits_says_why(blender):
+    """A stress test (2026-12-07): the Cube at resolution 1 has 8 output points, and the
+    record of its carried layers takes 4 a layer; adding a second UV map went through the
+    update of carried layers only and failed with a raw ValueError ("internal error"), and a
+    Rebuild then blamed loose or merged vertices the Cube does not have."""
+    from blender_addon import api
+
+    bpy.ops.mesh.primitive_cube_add()
+    obj = bpy.context.active_object
+    api.add_surface(obj, resolution=1)
+    assert api.status(obj)["error"] == ""
+    X = positions(obj.data)
+    obj.data.uv_layers.new(name="Second")
+    bpy.context.view_layer.update()
+    error = api.status(obj)["error"]
+    assert "internal error" not in error and "loose" not in error, error
+    assert "4 for each of the 3 layers it carries" in error and "raise the resolution" in error
+    assert np.array_equal(evaluated(obj), X)            # the base mesh, untouched
+    api.set_settings(obj, resolution=2)
+    assert len(evaluated(obj)) == 26 and api.status(obj)["error"] == ""
