@@ -32,7 +32,8 @@ __all__ = ["memory_estimate", "build_estimate", "check_build", "work_bytes",
            "evaluation_chunk", "assembly_chunk",
            "face_step_bytes", "BYTES_PER_SAMPLE", "BYTES_PER_ENTRY", "BYTES_PER_VERTEX",
            "CHUNK_BYTES",
-           "MIN_WORK_BYTES", "WORK_FRACTION", "BYTES_PER_TERM", "ASSEMBLY_BYTES_PER_TERM"]
+           "MIN_WORK_BYTES", "WORK_FRACTION", "BYTES_PER_TERM", "ASSEMBLY_BYTES_PER_TERM",
+           "megabytes"]
 
 # measured 227 B per sample besides the factors (lattice, points, row pointers), margin 30%
 BYTES_PER_SAMPLE = 300
@@ -64,6 +65,15 @@ BUILD_MIN_BUDGET = 2.0e9
 # the corrected coefficients and the optimiser's arrays (measured 2026-12-06: Suzanne 1.9 kB
 # a point at peak over the build without it, 29 -> 87 MB traced; the cow 0.8 kB), with a margin
 FAIRING_BYTES_PER_POINT = 4000
+
+
+def megabytes(b) -> str:
+    """A byte count in MB for messages (the add-on's budget is set in MB): three
+    significant digits below 100 MB, whole MB above, never in exponent form. An estimate
+    of 1.4e6 bytes against a budget of 1e6 read "1 MB exceeds the budget 1 MB" (a stress
+    test); now "1.4 MB exceeds the budget 1 MB"."""
+    x = float(b) / 1e6
+    return f"{x:.0f} MB" if x >= 100 else f"{x:.3g} MB" if x >= 1e-3 else f"{x:.1e} MB"
 
 
 def work_bytes(budget=None) -> float:
@@ -140,9 +150,9 @@ def check_build(face_sizes, budget: float, n_data: int = 0) -> None:
     hint = (f"; its largest face has {int(n.max())} corners and the build's memory grows as "
             f"the cube of a face's corners: split large faces (Triangulate or Poke Faces)"
             if BUILD_BYTES_PER_N3 * np.sum(n[n > 4] ** 3) > 0.25 * est else "")
-    raise ResourceLimitError(f"the surface build needs an estimated {est / 1e6:.0f} MB, over "
-                             f"the limit {limit / 1e6:.0f} MB (memory_budget, at least "
-                             f"{BUILD_MIN_BUDGET / 1e6:.0f} MB for the build){hint}")
+    raise ResourceLimitError(f"the surface build needs an estimated {megabytes(est)}, over "
+                             f"the limit {megabytes(limit)} (memory_budget, at least "
+                             f"{megabytes(BUILD_MIN_BUDGET)} for the build){hint}")
 
 
 def fairing_estimate(n_points: int) -> int:

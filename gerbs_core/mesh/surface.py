@@ -40,7 +40,7 @@ from .lattice import Lattice, output_counts
 from .lattice_templates import obtuse_flips
 from .layout import face_layouts
 from .memory import (BUILD_MIN_BUDGET, assembly_chunk, check_build, evaluation_chunk,
-                     fairing_estimate, memory_estimate)
+                     fairing_estimate, megabytes, memory_estimate)
 from .monomials import monomials
 from .repair import MeshWarning, repair_mesh
 from .rings import data_rings
@@ -100,8 +100,8 @@ def faired(model: SurfaceModel, rest, h, rule: FairnessRule, budget: float):
     except FairingSkipped as skip:
         return model, MeshWarning(
             "fairing_skipped", f"the surface is not faired: the {skip.points} lattice points "
-            f"of its sharply turning faces would need about {fairing_estimate(skip.points) / 1e6:.0f} MB, "
-            f"over the build's limit (memory_budget, at least {BUILD_MIN_BUDGET / 1e6:.0f} MB)",
+            f"of its sharply turning faces would need about {megabytes(fairing_estimate(skip.points))}, "
+            f"over the build's limit (memory_budget, at least {megabytes(BUILD_MIN_BUDGET)})",
             (), "face")
     if corr is not None:
         model = replace(model, fits=FairedFits(model.fits, corr))
@@ -400,8 +400,8 @@ class BlendingSurface(Immutable):
         est = self.memory_estimate(resolution)
         if est > self.memory_budget:
             raise ResourceLimitError(f"resolution {resolution}: {P} points, estimated memory "
-                                     f"{est / 1e6:.0f} MB exceeds the budget "
-                                     f"{self.memory_budget / 1e6:.0f} MB (memory_budget)")
+                                     f"{megabytes(est)} exceeds the budget "
+                                     f"{megabytes(self.memory_budget)} (memory_budget)")
         return Lattice(self.topology, resolution,
                        flip=obtuse_flips(self.topology, self.layouts.angles))
 

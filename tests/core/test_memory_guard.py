@@ -24,6 +24,7 @@ from gerbs_core import BlendingSurface
 from gerbs_core.datasets import primitives
 from gerbs_core.errors import GERBSValueError, ResourceLimitError
 from gerbs_core.mesh.lattice import output_counts
+from gerbs_core.mesh.memory import megabytes
 
 SLACK = 32e6
 FACTOR = 8.0
@@ -40,7 +41,7 @@ def _estimate(surface, resolution):
     msg = str(info.value)
     P, _ = output_counts(surface.topology, resolution)
     assert f"{P} points" in msg and "memory_budget" in msg
-    stated = float(re.search(r"estimated memory (\d+) MB", msg).group(1)) * 1e6
+    stated = float(re.search(r"estimated memory ([\d.]+) MB", msg).group(1)) * 1e6
     assert abs(stated - tight.memory_estimate(resolution)) <= 0.5e6
     return est
 
@@ -79,7 +80,7 @@ def test_over_budget_is_refused_before_allocating(stage):
         _peak(lambda: getattr(surface, stage)(r))
     msg = str(info.value)
     assert f"resolution {r}" in msg and "exceeds the budget 50 MB" in msg
-    est = float(re.search(r"estimated memory (\d+) MB", msg).group(1)) * 1e6
+    est = float(re.search(r"estimated memory ([\d.]+) MB", msg).group(1)) * 1e6
     assert est > 1e12
     # nothing of that size was touched: the refusal costs (almost) nothing
     tracemalloc.start()
@@ -99,7 +100,7 @@ def test_budget_is_configurable_per_surface():
     below = BlendingSurface(X, faces, memory_budget=0.3 * est)
     own = below.memory_estimate(r)      # its steps are smaller, the output is not
     assert 0.3 * est < own < est
-    with pytest.raises(ResourceLimitError, match=f"estimated memory {own / 1e6:.0f} MB"):
+    with pytest.raises(ResourceLimitError, match=f"estimated memory {megabytes(own)}"):
         below.stencil(r)
     above = BlendingSurface(X, faces, memory_budget=2.0 * est)
     assert above.stencil(r).shape[0] == output_counts(above.topology, r)[0]
@@ -173,7 +174,7 @@ def test_a_mesh_too_large_for_a_small_budget_is_still_refused():
     surface = BlendingSurface(X, faces, memory_budget=1e6)
     for stage in ("stencil", "tessellate"):
         with pytest.raises(ResourceLimitError, match=r"resolution 4: \d+ points, estimated "
-                           r"memory \d+ MB exceeds the budget 1 MB \(memory_budget\)"):
+                           r"memory [\d.]+ MB exceeds the budget 1 MB \(memory_budget\)"):
             getattr(surface, stage)(4)
 
 
@@ -236,7 +237,7 @@ def test_a_huge_ngon_is_refused_before_its_build_allocates():
     from gerbs_core.mesh.memory import build_estimate, check_build
 
     X, faces = _circle(512)
-    with pytest.raises(ResourceLimitError, match=r"needs an estimated \d+ MB, over the limit "
+    with pytest.raises(ResourceLimitError, match=r"needs an estimated [\d.]+ MB, over the limit "
                        r"2000 MB \(memory_budget.*largest face has 512 corners.*Poke Faces"):
         BlendingSurface(X, faces)
     tracemalloc.start()
@@ -252,3 +253,16 @@ def test_a_huge_ngon_is_refused_before_its_build_allocates():
     check_build([512], 2 * build_estimate([512]))
     with pytest.raises(ResourceLimitError):
         check_build([512], 0.5 * build_estimate([512]))
+
+
+def test_memory_in_messages_tells_an_estimate_from_the_budget_it_exceeds():
+    """A stress test (2026-12-07): a 16-segment Cylinder against a 1 MB budget read
+    "estimated memory 1 MB exceeds the budget 1 MB" (both rounded to whole MB)."""
+    assert [megabytes(b) for b in (1.4e6, 1e6, 12.34e6, 2.57e9, 4.07e12, 2e2)] == \
+        ["1.4 MB", "1 MB", "12.3 MB", "2570 MB", "4070000 MB", "2.0e-04 MB"]
+    X, faces = primitives.cylinder(16) if hasattr(primitives, "cylinder") else primitives.suzanne()
+    surface = BlendingSurface(X, faces, memory_budget=1e6)
+    with pytest.raises(ResourceLimitError) as info:
+        surface.stencil(8)
+    stated = re.search(r"estimated memory ([\d.]+) MB exceeds the budget 1 MB", str(info.value))
+    assert stated is not None and float(stated.group(1)) > 1.0, str(info.value)
