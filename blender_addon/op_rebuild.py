@@ -23,11 +23,12 @@ class OBJECT_OT_gerbs_rebuild(bpy.types.Operator):
         obj = context.active_object
         with Progress(window_manager=context.window_manager) as progress:
             results = api.update(obj, force=True, progress=progress, raise_errors=False)
-        errors = [r.message for r in results if r.status == "error"]
-        if errors:
-            self.report({"ERROR"}, "; ".join(errors))
+        if results and results[0].status == "error":
+            self.report({"ERROR"}, results[0].message)
             return {"CANCELLED"}
-        warning = api.status(obj)["warning"]
+        # a further GERBS modifier is ignored by the sync (its own error line says so)
+        ignored = [r.message for r in results[1:] if r.status == "error"]
+        warning = "; ".join([api.status(obj)["warning"]] + ignored).strip("; ")
         if warning:
             self.report({"WARNING"}, warning)
         return {"FINISHED"}

@@ -195,6 +195,13 @@ def test_a_gerbs_modifier_copied_in_the_stack_does_not_block_applying_the_first(
         bpy.ops.object.modifier_copy(modifier=mod.name)
     extra = obj.modifiers[1]
     assert "one GERBS Blending Surface modifier per object" in api.status(obj, extra)["error"]
+    # Rebuild and update rebuild the first one and do not fail for the ignored copy (a
+    # stress test: both raised its error); the operator reports it as a warning
+    outcome = api.update(obj, force=True)
+    assert outcome[0].status != "error" and outcome[1].status == "error"
+    with bpy.context.temp_override(object=obj, active_object=obj):
+        assert bpy.ops.object.gerbs_rebuild() == {"FINISHED"}
+    assert np.array_equal(evaluated(obj), P)
     with pytest.raises(GERBSSyncError, match="this one is ignored"):
         api.apply(obj, extra)
     assert len(obj.modifiers) == 2
