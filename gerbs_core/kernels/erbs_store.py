@@ -4,8 +4,11 @@ Building them (:func:`~.erbs_table.build_tables`: adaptive quadrature, the value
 table's search, the clip interval) costs ~14 ms of CPU, most of a small first call of
 anything that uses ``ERBS()`` (a 4,000-point scattered interpolant is ~100 ms); loading
 them from ``erbs_default.npy`` costs ~0.1 ms. The file holds the build's arrays bit for
-bit (tests/core/test_kernels_erbs.py rebuilds and compares; regenerate with
-``erbs_store.regenerate()``); when it is missing, unreadable or of
+bit as made on one machine (regenerate with ``erbs_store.regenerate()``); another
+processor's BLAS rounds the build differently and its quadrature may settle on other cells
+(118 against 82 on a new machine), so tests/core/test_kernels_erbs.py compares the kernel
+the file gives with a rebuild's to 1e-14 of each derivative's scale, and the file makes
+ERBS() the same everywhere. When it is missing, unreadable or of
 another layout, the tables are built as for every other parameter set.
 
 Layout: one flat float64 array, a header of ``_HEAD`` numbers (layout version, the

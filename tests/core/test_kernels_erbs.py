@@ -233,30 +233,36 @@ def test_immutable_and_value_semantics():
     assert "lam=0.3" in repr(ERBS(lam=0.3))
 
 
-def test_stored_default_tables_are_the_build_bit_for_bit(tmp_path):
-    """ERBS() loads its tables from the package (kernels.erbs_store): every array and
-    number equals a fresh build's exactly (a stale file fails here), and a missing or
-    foreign file falls back to the build."""
-    from gerbs_core.kernels import erbs_store
-    from gerbs_core.kernels.erbs import _default_tables
+def test_stored_default_tables_agree_with_a_fresh_build(tmp_path, monkeypatch):
+    """ERBS() loads its tables from the package (kernels.erbs_store): made by this code (its
+    source fingerprint, or load() refuses the file), and the kernel they give equals a fresh
+    build's to the tables' own accuracy; a missing or foreign file falls back to the build.
+
+    Not bit for bit: the build's adaptive quadrature rounds with the machine's BLAS, and on
+    another processor it settles on other cells (a new machine, 2026-12-07: 118 cells
+    against the stored 82, both within the 5e-15 table tolerance), which is why the tables
+    are stored: ERBS() is then the same everywhere."""
+    from gerbs_core.kernels import erbs, erbs_store
     from gerbs_core.kernels.erbs_table import build_tables
-    import os
     stored = erbs_store.load()
     assert stored is not None, ("gerbs_core/kernels/erbs_default.npy missing or stale (made "
                                 "by another version of the builder's code): run "
                                 "erbs_store.regenerate() with OPENBLAS_NUM_THREADS=1")
-    if os.environ.get("OPENBLAS_NUM_THREADS") != "1":
-        pytest.skip("the build is bit-reproducible with OPENBLAS_NUM_THREADS=1 (erbs_store.regenerate)")
+    np.testing.assert_array_equal(erbs_store.pack(erbs._default_tables()),
+                                  erbs_store.pack(stored))         # ERBS() uses the store
     built = build_tables.__wrapped__(ERBS, erbs_store.DEFAULT)
-    np.testing.assert_array_equal(erbs_store.pack(stored), erbs_store.pack(built))
-    (m1, t1, c1, s1), (m2, t2, c2, s2) = stored, built
-    for name in ("a", "b", "icoef", "left", "breaks", "_icoef_t"):
-        np.testing.assert_array_equal(getattr(m1, name), getattr(m2, name))
-    assert (m1.Z, m1.tail_sum, c1, s1) == (m2.Z, m2.tail_sum, c2, s2)
-    assert (t1.M, t1.uniform, t1.deg) == (t2.M, t2.uniform, t2.deg)
-    for x, y in zip(t1.coef + [t1.breaks, t1.inv_h], t2.coef + [t2.breaks, t2.inv_h]):
-        np.testing.assert_array_equal(x, y)
-    np.testing.assert_array_equal(erbs_store.pack(_default_tables()), erbs_store.pack(built))
+    (m1, _, c1, s1), (m2, _, c2, s2) = stored, built
+    assert c1 == c2 and abs(s1 - s2) <= 1e-12 * max(abs(s1), 1.0)
+    assert abs(m1.Z - m2.Z) <= 1e-13 * abs(m1.Z)
+    t = np.concatenate([np.linspace(0.0, 1.0, 20001), np.geomspace(1e-6, 0.05, 400),
+                        1.0 - np.geomspace(1e-6, 0.05, 400)])
+    nus = range(4)
+    from_store = [ERBS()(t, nu=nu) for nu in nus]
+    monkeypatch.setattr(erbs, "_default_tables", lambda: built)
+    for nu, a in zip(nus, from_store):
+        b = ERBS()(t, nu=nu)
+        scale = max(np.abs(b).max(), 1.0)
+        assert np.abs(a - b).max() <= 1e-14 * scale, (nu, np.abs(a - b).max(), scale)
     assert erbs_store.load(tmp_path / "missing.npy") is None
     np.save(tmp_path / "foreign.npy", np.arange(20.0))
     assert erbs_store.load(tmp_path / "foreign.npy") is None
