@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import api, ids
+from . import api, ids, polls
 from .progress import Progress
 from .properties import settings_annotations, settings_from
 
@@ -18,8 +18,7 @@ class OBJECT_OT_gerbs_add_surface(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        obj = context.active_object if hasattr(context, "active_object") else None
-        return obj is not None and obj.type == "MESH"
+        return polls.mesh_object(cls, context) is not None
 
     def execute(self, context):
         obj = context.active_object

@@ -5,7 +5,7 @@ import bpy
 
 from .errors import GERBSError
 
-from . import api, ids
+from . import api, ids, polls
 
 
 class OBJECT_OT_gerbs_apply(bpy.types.Operator):
@@ -17,8 +17,7 @@ class OBJECT_OT_gerbs_apply(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        obj = getattr(context, "active_object", None)
-        return obj is not None and api.get_modifier(obj) is not None and obj.mode == "OBJECT"
+        return polls.with_surface(cls, context, object_mode=True)
 
     def execute(self, context):
         try:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import api, ids
+from . import api, ids, polls
 
 
 class OBJECT_OT_gerbs_remove(bpy.types.Operator):
@@ -15,8 +15,7 @@ class OBJECT_OT_gerbs_remove(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        obj = getattr(context, "active_object", None)
-        return obj is not None and api.get_modifier(obj) is not None
+        return polls.with_surface(cls, context)
 
     def execute(self, context):
         api.remove(context.active_object)

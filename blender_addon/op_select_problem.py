@@ -71,7 +71,11 @@ class OBJECT_OT_gerbs_select_problem(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return bool(_problems(getattr(context, "active_object", None)))
+        if _problems(getattr(context, "active_object", None)):
+            return True
+        cls.poll_message_set("No GERBS error or mesh repair of the active object names "
+                             "vertices, edges or faces")
+        return False
 
     def execute(self, context):
         obj = context.active_object

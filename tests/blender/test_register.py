@@ -47,6 +47,36 @@ def test_menu_entry_adds_modifier_via_operator(blender):
         assert label in names
 
 
+@pytest.mark.parametrize("op, words", [
+    ("gerbs_remove", "'Cube' has no GERBS Blending Surface modifier"),
+    ("gerbs_rebuild", "'Cube' has no GERBS Blending Surface modifier"),
+    ("gerbs_apply", "'Cube' has no GERBS Blending Surface modifier"),
+    ("gerbs_select_problem", "names vertices, edges or faces"),
+])
+def test_an_operator_that_cannot_run_says_why(blender, op, words):
+    """A newcomer's walk (2026-12-07): gerbs_remove on an object without the modifier said
+    only Blender's "poll() failed, context is incorrect"."""
+    bpy.ops.mesh.primitive_cube_add()
+    with pytest.raises(RuntimeError, match=words) as info:
+        getattr(bpy.ops.object, op)()
+    assert "context is incorrect" not in str(info.value)
+
+
+def test_add_and_apply_say_what_is_missing(blender):
+    from blender_addon import api
+
+    bpy.ops.object.empty_add()
+    with pytest.raises(RuntimeError, match="'Empty' is not a mesh"):
+        bpy.ops.object.gerbs_add_surface()
+    bpy.ops.mesh.primitive_cube_add()
+    api.add_surface(bpy.context.active_object, resolution=2)
+    bpy.ops.object.mode_set(mode="EDIT")
+    with pytest.raises(RuntimeError, match="Only in Object Mode"):
+        bpy.ops.object.gerbs_apply()
+    bpy.ops.object.mode_set(mode="OBJECT")
+    assert bpy.ops.object.gerbs_apply() == {"FINISHED"}
+
+
 def test_unregister_with_modifiers_keeps_objects_and_surface(blender):
     import blender_addon
     from blender_addon import api
