@@ -56,14 +56,25 @@ def format_warnings(warnings) -> str:
     if not warnings:
         return ""
     plural = {"vertex": "vertices", "face": "faces"}
-    parts = [f"{w.tag} ({len(w.indices)} "
-             f"{plural.get(w.element, w.element) if len(w.indices) > 1 else w.element} "
-             f"{list(w.indices[:5])}{' ...' if len(w.indices) > 5 else ''})"
-             for w in warnings if w.indices]
-    # a warning naming no element (the core's fairing_skipped) is its own message
+
+    def named(w):
+        return (f"{len(w.indices)} "
+                f"{plural.get(w.element, w.element) if len(w.indices) > 1 else w.element} "
+                f"{list(w.indices[:5])}{' ...' if len(w.indices) > 5 else ''}")
+
+    repairs = [w for w in warnings if w.indices and w.tag not in SURFACE_WARNINGS]
+    parts = [f"{w.tag} ({named(w)})" for w in repairs]
+    # a warning about the surface itself (self_crossing) says what it is, with its faces;
+    # one naming no element (fairing_skipped, thin_part) is its own message
     said = (["mesh repaired: " + "; ".join(parts)] if parts else []) + \
+        [f"the surface passes through itself at {named(w)} (Select shows them)"
+         for w in warnings if w.indices and w.tag in SURFACE_WARNINGS] + \
         [w.message for w in warnings if not w.indices]
     return PREFIX + "; ".join(said)
+
+
+# warnings about the surface built, not repairs of the mesh (they name input faces)
+SURFACE_WARNINGS = ("self_crossing",)
 
 
 def operator_message(exc: Exception) -> str:

@@ -47,6 +47,7 @@ from .rings import data_rings
 from .stencil import Stencil
 from .surface_inputs import (chart_points, check_settings, face_points, points, positive,
                              unit_normals)
+from .self_crossing import self_crossing_warning, surface_crossings
 from .thin_parts import thin_part_samples, thin_part_warning
 from .topology import MeshTopology
 from .validation import check_finite
@@ -274,16 +275,25 @@ class BlendingSurface(Immutable):
     def warnings(self) -> tuple:
         """What the repair changed (:class:`gerbs_core.mesh.repair.MeshWarning`, ordered),
         then the kept vertices given a zero normal (tag ``zero_normal``, no Hermite normal
-        there), a skipped fairing (``fairing_skipped``) and a surface bulging far beyond its
-        cage (``thin_part``, :mod:`gerbs_core.mesh.thin_parts`: read on first access from
-        the surface at resolution 4, or 2 on a large mesh)."""
+        there), a skipped fairing (``fairing_skipped``), a surface bulging far beyond its
+        cage (``thin_part``, :mod:`gerbs_core.mesh.thin_parts`) and one passing through
+        itself where the cage does not (``self_crossing``, naming the input faces:
+        :mod:`gerbs_core.mesh.self_crossing`); the last two read on first access from the
+        surface at resolution 4, or 2 on a large mesh."""
         return self._warnings + self._thin_part
 
     @cached_property
     def _thin_part(self) -> tuple:
-        S = thin_part_samples(self)
-        w = thin_part_warning(self._X, S)
-        return () if w is None else (w,)
+        """The warnings about the surface itself, read on one lattice: ``thin_part`` and
+        ``self_crossing`` (:mod:`gerbs_core.mesh.self_crossing`, naming input faces)."""
+        lat, S = thin_part_samples(self)
+        out = [thin_part_warning(self._X, S)]
+        if lat is not None:
+            pairs = surface_crossings(self.topology, self._X, S, lat.triangles,
+                                      lat.triangle_face)
+            out.append(self_crossing_warning(pairs, np.asarray(self.face_map)[
+                np.asarray(lat.triangle_face)]))
+        return tuple(w for w in out if w is not None)
 
     @property
     def coefficients(self) -> np.ndarray:

@@ -28,18 +28,19 @@ SIGNIFICANT = 0.05  # ... by more than SIGNIFICANT x the cage's largest extent (
 MAX_POINTS = 100_000  # the most samples read at resolution 4 (else at 2)
 
 
-def thin_part_samples(surface) -> np.ndarray:
-    """(N, 3) points of a :class:`gerbs_core.mesh.surface.BlendingSurface` on its lattice at
+def thin_part_samples(surface) -> tuple:
+    """(lattice, (N, 3) its points) of a :class:`gerbs_core.mesh.surface.BlendingSurface` at
     resolution 4, or 2 where that has more than MAX_POINTS points or exceeds the surface's
-    memory budget; (0, 3) where 2 exceeds it too (nothing is read: no warning)."""
+    memory budget; (None, (0, 3)) where 2 exceeds it too (nothing is read: no warning). The
+    self-crossing check (:mod:`gerbs_core.mesh.self_crossing`) reads the same samples."""
     for r in (4, 2):
         if (r == 2 or output_counts(surface.topology, r)[0] <= MAX_POINTS) \
                 and surface.memory_estimate(r) <= surface.memory_budget:
             lat = surface.lattice(r)
             # the lattice's own points (in their faces: no check needed)
-            return surface._evaluate_at(lat.face, lat.map_to_polygon(surface.layouts.corners),
-                                        0, (lat.n_points,))[0]
-    return np.empty((0, 3))
+            return lat, surface._evaluate_at(lat.face, lat.map_to_polygon(
+                surface.layouts.corners), 0, (lat.n_points,))[0]
+    return None, np.empty((0, 3))
 
 
 def thin_part_warning(cage, surface_points):

@@ -17,7 +17,8 @@ def _assert_current(obj, resolution=R):
     """The evaluated surface equals a fresh build from what the modifier receives now
     (the surface is read first: reading the input toggles the modifier, an update)."""
     P = evaluated(obj)
-    assert warnings(obj) == []
+    # no error or stale warning; a spiky shape key may make the surface cross itself (said)
+    assert [w for w in warnings(obj) if "passes through itself" not in w[1]] == []
     X = modifier_input(obj)
     offsets, corners = topology(obj.data)
     assert np.abs(P - fresh_surface(X, offsets, corners, resolution)).max() <= 1e-5

@@ -163,6 +163,34 @@ def test_a_thin_part_warns_in_the_panel_with_nothing_to_select(blender):
     assert api.status(obj)["warning"] == "" and not mod.node_warnings
 
 
+def test_a_surface_through_itself_warns_and_selects_the_faces(blender):
+    """A modelling session (2026-12-07): a cup (a Cylinder, its top inset 0.12 and extruded
+    down 1.75) came out with its floor through its bottom and its inner wall through the
+    outer one, with no word. The warning line says so, and Select selects those faces."""
+    import bmesh
+
+    from blender_addon import api, panels
+    from tests.core.test_self_crossing import cup
+
+    V, F = cup()
+    mesh = bpy.data.meshes.new("cup")
+    mesh.from_pydata(V.tolist(), [], [list(f) for f in F])
+    mesh.update()
+    obj = bpy.data.objects.new("cup", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    mod = api.add_surface(obj, resolution=4)
+    status = api.status(obj)
+    assert status["error"] == "" and "passes through itself" in status["warning"]
+    (w,) = [w for w in status["warnings"] if w.tag == "self_crossing"]
+    rows = panels.panel_rows(obj, mod, width_px=400.0)
+    assert rows["warning"] and rows["select"]
+    assert bpy.ops.object.gerbs_select_problem() == {"FINISHED"}
+    bm = bmesh.from_edit_mesh(obj.data)
+    assert sorted(f.index for f in bm.faces if f.select) == sorted(w.indices)
+    bpy.ops.object.mode_set(mode="OBJECT")
+
+
 @pytest.mark.parametrize("faces, headline", [
     ([(0, 1, 2, 3)], "Every face of the mesh is degenerate"),   # one collinear quad
     ([], "The mesh has no faces."),

@@ -120,7 +120,10 @@ def test_blender_exports_build_with_seams_named_and_welded_on_request(blender, t
     tags = {w.tag: w for w in s.warnings}
     X0, F0 = suzanne()
     if ext == ".stl":  # joined by position: the 2 vertex pairs Suzanne shares become bow-ties
-        assert list(tags) == ["non_manifold_vertex"] and len(tags["non_manifold_vertex"].indices) == 2
+        # (Blender's triangulation of her quads folds the surface at the mouth's corners:
+        # it crosses itself there, and says so)
+        assert [t for t in tags if t != "self_crossing"] == ["non_manifold_vertex"]
+        assert len(tags["non_manifold_vertex"].indices) == 2
         assert s.topology.n_vertices == len(X0)
     else:  # split at every flat-shaded edge / UV seam: an open seam, named (PLY: seams
         # meeting at a vertex leave fans touching there, split as bow-ties)

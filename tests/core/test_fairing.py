@@ -220,7 +220,8 @@ def test_a_fairing_over_the_memory_limit_is_skipped_and_said(monkeypatch):
     monkeypatch.setattr(memory, "FAIRING_BYTES_PER_POINT", 1e6)   # 31k points: 31 GB
     s = BlendingSurface(V, F)
     assert not isinstance(s.model.fits, FairedFits)
-    assert [w.tag for w in s.warnings] == ["fairing_skipped"]
+    # (the unfaired surface folds, and crosses itself there: said too)
+    assert [w.tag for w in s.warnings if w.tag != "self_crossing"] == ["fairing_skipped"]
     assert "not faired" in s.warnings[0].message
     off = BlendingSurface(V, F, fairness=OFF)
     assert np.array_equal(s.tessellate(2)[0], off.tessellate(2)[0])

@@ -88,9 +88,9 @@ def test_samples_are_the_lattice_at_4_or_2(monkeypatch):
     # output lattice at resolution 4 (the add-on's default), at 2 above MAX_POINTS
     V, F = P.suzanne()
     s = BlendingSurface(V, F)
-    assert np.array_equal(thin_parts.thin_part_samples(s), s.tessellate(4)[0])
+    assert np.array_equal(thin_parts.thin_part_samples(s)[1], s.tessellate(4)[0])
     monkeypatch.setattr(thin_parts, "MAX_POINTS", 1000)
-    assert np.array_equal(thin_parts.thin_part_samples(s), s.tessellate(2)[0])
+    assert np.array_equal(thin_parts.thin_part_samples(s)[1], s.tessellate(2)[0])
 
 
 def test_a_small_memory_budget_reads_less_and_never_raises():
@@ -104,8 +104,8 @@ def test_a_small_memory_budget_reads_less_and_never_raises():
     assert need2 < need4 <= 1e6
     mid = BlendingSurface(board, F, memory_budget=0.5 * (need2 + need4))
     assert (mid.memory_estimate(4), mid.memory_estimate(2)) == (need4, need2)
-    assert np.array_equal(thin_parts.thin_part_samples(mid), mid.tessellate(2)[0])
+    assert np.array_equal(thin_parts.thin_part_samples(mid)[1], mid.tessellate(2)[0])
     assert len(_thin(mid)) == 1
     tiny = BlendingSurface(board, F, memory_budget=0.5 * need2)
-    assert thin_parts.thin_part_samples(tiny).shape == (0, 3)
+    assert thin_parts.thin_part_samples(tiny)[1].shape == (0, 3)
     assert _thin(tiny) == []
