@@ -279,7 +279,10 @@ def import_mesh(bpy, path: Path):
     except RuntimeError as exc:
         from blender_addon.errors import operator_message
         raise UserError(f"cannot read {path.name}: {operator_message(exc)}") from None
-    return [o for o in bpy.data.objects if o not in before and o.type == "MESH"]
+    # the meshes of the file: not the bone shapes the glTF importer adds, hidden, in its
+    # "glTF_not_exported" collection (an export test: a surface was built for them)
+    return [o for o in bpy.data.objects if o not in before and o.type == "MESH"
+            and o.visible_get()]
 
 
 # a vertex line with a word that may not be a finite single-precision number: nan, inf,
@@ -563,8 +566,10 @@ def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -
                                       apply_modifiers=True, export_materials=any(
                                           len(o.data.materials) for o in objects))
             else:
+                # a still surface: no animation (an input's morph weights channel would
+                # point at a mesh without morph targets, an invalid file; an export test)
                 bpy.ops.export_scene.gltf(filepath=str(target), use_selection=True,
-                                          export_apply=True,
+                                          export_apply=True, export_animations=False,
                                           export_format="GLB" if ext == ".glb" else "GLTF_SEPARATE")
         produced = sorted(tmp.iterdir(), key=lambda p: p.name == out.name)  # main file last
         for p in produced:
@@ -597,6 +602,14 @@ def run(args, src: Path, out: Path, protected) -> None:
         objects = import_mesh(bpy, src)
         if not objects:
             raise UserError(f"{args.input} contains no mesh")
+        for obj in objects:  # what a still surface leaves out: said, not dropped silently
+            rigged = obj.find_armature() is not None
+            keys = obj.data.shape_keys is not None
+            if rigged or keys:
+                what = " and ".join(x for x, y in (("its skin (armature)", rigged),
+                                                   ("its shape keys (morph targets)", keys)) if y)
+                print(f"warning: {obj.name}: {what} and animation are not written: the "
+                      f"output is the surface of the mesh as imported", file=sys.stderr)
         for obj in objects:
             if args.crease_angle is not None or args.sharp_creases:
                 # welded first: an exporter's split seams leave no edge between two faces

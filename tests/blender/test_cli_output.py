@@ -120,6 +120,48 @@ def test_an_obj_output_keeps_the_materials_in_its_own_mtl(blender, tmp_path):
     assert out.returncode == 0 and not (tmp_path / "s.mtl").exists()
 
 
+def test_a_rigged_gltf_gives_a_valid_still_surface_and_says_what_it_leaves_out(blender,
+                                                                             tmp_path):
+    """An export test (2026-12-07): a glTF with a skinned, animated limb and a cube with a
+    morph target came out with the rig and morphs dropped silently, a 'weights' animation
+    channel aimed at a mesh without morph targets (an invalid glTF), and a surface built
+    for the bone shape the importer adds (hidden, not exported)."""
+    import json
+    import struct
+
+    import bpy
+    bpy.ops.mesh.primitive_cylinder_add(vertices=8, depth=4, location=(0, 0, 2))
+    limb = bpy.context.object
+    limb.name = "Limb"
+    bpy.ops.object.armature_add(location=(0, 0, 0))
+    arm = bpy.context.object
+    limb.parent = arm
+    group = limb.vertex_groups.new(name=arm.data.bones[0].name)
+    group.add(list(range(len(limb.data.vertices))), 1.0, "REPLACE")
+    limb.modifiers.new("Armature", "ARMATURE").object = arm
+    arm.pose.bones[0].keyframe_insert("rotation_quaternion", frame=1)
+    bpy.ops.mesh.primitive_cube_add(location=(4, 0, 0))
+    cube = bpy.context.object
+    cube.name = "Morph"
+    cube.shape_key_add(name="Basis")
+    key = cube.shape_key_add(name="Up")
+    key.data[0].co.z += 1.0
+    key.keyframe_insert("value", frame=1)
+    src = tmp_path / "rig.glb"
+    bpy.ops.export_scene.gltf(filepath=str(src), export_skins=True, export_morph=True,
+                              export_animations=True)
+    out = run(src, "-o", tmp_path / "o.glb", "--resolution", "2", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert "Limb: its skin (armature) and animation are not written" in out.stderr
+    assert "Morph: its shape keys (morph targets) and animation are not written" in out.stderr
+    built = [x.split(":")[0] for x in out.stderr.splitlines() if "surface with" in x]
+    assert sorted(built) == ["Limb", "Morph"], built                  # no bone shape
+    data = (tmp_path / "o.glb").read_bytes()
+    doc = json.loads(data[20:20 + struct.unpack("<I", data[12:16])[0]])
+    assert not doc.get("animations") and not doc.get("skins")
+    assert sorted(n.get("name") for n in doc["nodes"]) == ["Limb", "Morph"]
+
+
 def test_the_wrong_python_gets_one_error_line_naming_the_environment(tmp_path):
     # -S: no site-packages, so no bpy (as a system Python without the project's environment)
     out = run(cwd=tmp_path, python=(sys.executable, "-S"))
