@@ -572,11 +572,23 @@ def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -
                                           export_apply=True, export_animations=False,
                                           export_format="GLB" if ext == ".glb" else "GLTF_SEPARATE")
         produced = sorted(tmp.iterdir(), key=lambda p: p.name == out.name)  # main file last
+        named = {out.name} | {q.name for q in sidecars(out)}   # names the output chooses
         for p in produced:
             dest = out.parent / p.name
+            # an image the exporter writes beside a .gltf keeps its own name: only another
+            # folder avoids it (an export test: "another output name" could never help)
+            where = "another output name or folder" if p.name in named else \
+                "another output folder"
             if any(_same_file(dest, q) for q in protected if q.exists()):
                 raise UserError(f"writing {out.name} would replace {dest.name}, which the "
-                                f"input uses; choose another output name or folder")
+                                f"input uses; choose {where}")
+            # a file of the user's that happens to share an image's name is not replaced
+            # (an export test: an unrelated checker.png was overwritten with no word); the
+            # same bytes (this command's earlier run) are
+            if (p.name not in named and dest.exists()
+                    and (not dest.is_file() or dest.read_bytes() != p.read_bytes())):
+                raise UserError(f"writing {out.name} would replace {dest.name} beside it, a "
+                                f"different file; choose {where}, or move that file")
         for p in produced:
             os.replace(p, out.parent / p.name)
     except OSError as exc:

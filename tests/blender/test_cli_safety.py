@@ -116,6 +116,53 @@ def test_gltf_output_never_replaces_a_file_the_input_uses(tmp_path):
     assert out.returncode == 0, out.stderr  # elsewhere it is read and built
 
 
+def test_a_gltf_outputs_images_never_replace_a_different_file(blender, tmp_path):
+    """An export test (2026-12-07): a textured .gltf written to a folder holding an unrelated
+    checker.png replaced it with the texture, with no word; into the input's own folder it
+    was refused after the build, suggesting another output name, which cannot help."""
+    bpy.ops.mesh.primitive_cube_add()
+    cube = bpy.context.object
+    (tmp_path / "tex").mkdir()
+    img = bpy.data.images.new("checker", 8, 8)
+    img.generated_type = "COLOR_GRID"
+    img.filepath_raw = str(tmp_path / "tex" / "checker.png")
+    img.file_format = "PNG"
+    img.save()
+    mat = bpy.data.materials.new("Tex")
+    if not mat.node_tree:       # (Blender 5 makes material node trees by default)
+        mat.use_nodes = True
+    node = mat.node_tree.nodes.new("ShaderNodeTexImage")
+    node.image = img
+    mat.node_tree.links.new(node.outputs["Color"],
+                            mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"])
+    cube.data.materials.append(mat)
+    src = tmp_path / "tex" / "cube.gltf"
+    bpy.ops.export_scene.gltf(filepath=str(src), export_format="GLTF_SEPARATE")
+    # a folder with a file of the user's of that name: refused, the file kept
+    (tmp_path / "o2").mkdir()
+    mine = tmp_path / "o2" / "checker.png"
+    mine.write_text("my notes")
+    out = cli(src, "-o", tmp_path / "o2" / "r.gltf", "--resolution", "2", cwd=tmp_path)
+    # (known only once the exporter has named its images: after the build's warnings)
+    last = out.stderr.strip().splitlines()[-1]
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    assert last.startswith("error: writing r.gltf would replace checker.png beside it, a "
+                           "different file; choose another output folder"), last
+    assert mine.read_text() == "my notes" and not (tmp_path / "o2" / "r.gltf").exists()
+    # an empty folder, twice (the second run finds its own image): written both times
+    (tmp_path / "o3").mkdir()
+    for _ in range(2):
+        out = cli(src, "-o", tmp_path / "o3" / "r.gltf", "--resolution", "2", cwd=tmp_path)
+        assert out.returncode == 0, out.stderr
+    assert (tmp_path / "o3" / "checker.png").read_bytes() == \
+        (tmp_path / "tex" / "checker.png").read_bytes()
+    # beside the input: its image would be replaced; only another folder helps
+    out = cli(src, "-o", tmp_path / "tex" / "other.gltf", "--resolution", "2", cwd=tmp_path)
+    last = out.stderr.strip().splitlines()[-1]
+    assert out.returncode == 2 and "checker.png, which the input uses" in last
+    assert last.endswith("choose another output folder"), last
+
+
 def test_an_existing_output_is_replaced_by_a_rename(tmp_path):
     target = tmp_path / "o.obj"
     target.write_text("old")
