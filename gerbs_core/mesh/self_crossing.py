@@ -12,7 +12,10 @@ It reads the surface on the same lattice as the thin-part check (resolution 4, 2
 meshes): triangles of that lattice that cross, sharing no point, by a segment longer than
 ``MIN_OVERLAP`` of the pair's longest edge (so triangles that only touch, as the fans of
 a non-manifold vertex do at their common point, do not count). Exact for those triangles;
-a crossing thinner than them may be missed (a warning, not a proof).
+a crossing thinner than them may be missed (a warning, not a proof). Not blamed on the
+surface (:func:`surface_crossings`): crossings between faces that share a position (a fold
+of neighbours), those the cage has itself nearby (Suzanne's eyes pass through her head),
+and those next to a position of several vertices (a bow-tie's fans, an open seam).
 """
 from __future__ import annotations
 
@@ -26,12 +29,6 @@ __all__ = ["crossing_pairs", "surface_crossings", "self_crossing_warning", "MIN_
 
 MIN_OVERLAP = 1e-3   # a crossing segment shorter than this x the pair's longest edge: touching
 MAX_PAIRS = 4_000_000  # candidate pairs tested at once (about 0.5 GB of temporaries)
-
-
-def _cross(a, b):
-    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
-                     a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
 
 
 def _interval(P, d, line):
@@ -54,8 +51,8 @@ def _test(P, A, B, scale):
     """(K,) bool: do triangles A and B (index arrays into P (T, 3, 3)) cross by more than
     MIN_OVERLAP x scale (K,)?"""
     TA, TB = P[A], P[B]
-    nA = _cross(TA[:, 1] - TA[:, 0], TA[:, 2] - TA[:, 0])
-    nB = _cross(TB[:, 1] - TB[:, 0], TB[:, 2] - TB[:, 0])
+    nA = np.cross(TA[:, 1] - TA[:, 0], TA[:, 2] - TA[:, 0])
+    nB = np.cross(TB[:, 1] - TB[:, 0], TB[:, 2] - TB[:, 0])
     # signed distances (times |n|) of each triangle's corners to the other's plane, with
     # those within rounding of it put on it
     dB = np.einsum("kcj,kj->kc", TB - TA[:, :1], nA)
@@ -70,7 +67,7 @@ def _test(P, A, B, scale):
     k = np.flatnonzero(reach)
     if not len(k):
         return out
-    line = _cross(nA[k], nB[k])
+    line = np.cross(nA[k], nB[k])
     ln = np.linalg.norm(line, axis=1)
     ok = ln > 1e-12 * np.linalg.norm(nA[k], axis=1) * np.linalg.norm(nB[k], axis=1)
     line = line / np.maximum(ln, 1e-300)[:, None]
