@@ -203,7 +203,11 @@ def status(obj, mod=None) -> dict:
     ``render_error``: why the last final render's build failed ("" none; its renders show
     the input meanwhile); ``stale``: True while the viewport shows the base mesh without an
     error (the surface is out of date: Live Update off and the mesh or a setting edited;
-    Rebuild makes it); the other counts are then those of the last build."""
+    Rebuild makes it); the other counts are then those of the last build.
+    ``build_seconds``: the last build of the result (the sync); ``surface_seconds``: what
+    constructing its surface took, and ``surface_held``: True when that surface was held
+    from an earlier build with the same arguments (a resolution change makes only the
+    output: build_seconds is then that, a modelling session read it as the surface's)."""
     mod = _modifier(obj, mod)
     st = engine.get_state(obj, mod)
     error = gn.get_error(mod)
@@ -219,5 +223,6 @@ def status(obj, mod=None) -> dict:
     if st is not None and not st.error:
         out.update(points=st.n_points, faces=st.n_faces, triangles=st.n_triangles,
                    warnings=st.warnings,
-                   build_seconds=st.build_seconds, update_seconds=st.update_seconds)
+                   build_seconds=st.build_seconds, update_seconds=st.update_seconds,
+                   surface_seconds=st.surface_seconds, surface_held=st.surface_held)
     return out

@@ -20,6 +20,8 @@ and constructs a new one otherwise (:data:`counts` counts both, for tests).
 """
 from __future__ import annotations
 
+import time
+
 import hashlib
 import numbers
 from collections import Counter
@@ -62,6 +64,7 @@ class Model:
 
     key: str | None
     surface: object
+    seconds: float = 0.0  # what constructing the surface took (a reuse takes none)
 
 
 counts: Counter = Counter()  # "built": BlendingSurfaces constructed, "reused": held ones reused
@@ -150,9 +153,10 @@ def make_model(arguments: dict, held=()) -> Model:
                 return model
     if problem := scipy_problem():  # a message in the panel and status bar, not a traceback
         raise MissingDependencyError(problem)
+    t0 = time.perf_counter()
     surface = module("mesh.surface").BlendingSurface(**arguments)
     counts["built"] += 1
-    return Model(key, surface)
+    return Model(key, surface, time.perf_counter() - t0)
 
 
 def evaluate(model: Model, arguments: dict, resolution: int, progress) -> Built:

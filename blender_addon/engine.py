@@ -410,7 +410,10 @@ def _rebuild(obj, mod, res, settings, skey, inp, build, progress, t0, render):
         progress(0.05, "building surface")
         arguments = build_mod.surface_arguments(settings, inp, crz, rest)
         # kept on the state even if the output fails (a resolution over the memory budget)
-        st.model = build_mod.make_model(arguments, _held_models(obj, mod, render, force))
+        held = _held_models(obj, mod, render, force)
+        st.model = build_mod.make_model(arguments, held)
+        st.surface_seconds = st.model.seconds
+        st.surface_held = any(st.model is m for m in held)
         built = build_mod.evaluate(st.model, arguments, resolution, progress)
     except GERBSError as exc:
         return _fail(obj, mod, key, st, format_error(exc), progress,

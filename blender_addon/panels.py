@@ -81,8 +81,10 @@ def panel_rows(obj, mod, width_px: float = 300.0, scale: float = 1.0) -> dict:
     out["notes"] = [problems.wrap(n, width_px, scale) for n in
                     problems.stack_notes(obj, mod, bpy.app.background, locked, settings)]
     if "points" in info:
+        held = " (held)" if info["surface_held"] else ""
         out["status"] = [f"{info['points']} points, {info['faces']} faces",
-                         f"build {info['build_seconds']:.3f} s, "
+                         f"build {info['build_seconds']:.3f} s, surface "
+                         f"{info['surface_seconds']:.3f} s{held}, "
                          f"update {info['update_seconds'] * 1000:.1f} ms"]
     return out
 

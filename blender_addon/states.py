@@ -37,6 +37,8 @@ class SurfaceState:
     error: str = ""
     problem: object = None  # the InvalidMeshError behind `error` (select operator)
     build_seconds: float = 0.0
+    surface_seconds: float = 0.0  # constructing the surface (held: its first build's)
+    surface_held: bool = False  # the surface was held (a resolution change): not built
     update_seconds: float = 0.0
     warnings: tuple = ()  # gerbs_core.mesh.repair.MeshWarning of the last build
 

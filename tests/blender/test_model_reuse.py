@@ -60,11 +60,17 @@ def test_a_resolution_change_reuses_the_model_and_gives_a_fresh_builds_surface(b
     X = modifier_input(obj)
     P3 = evaluated(obj)
     model = _state(obj).model
+    first = api.status(obj)
+    assert not first["surface_held"] and first["surface_seconds"] <= first["build_seconds"]
     built, reused = _counts()
     api.set_settings(obj, resolution=4)
     P4 = evaluated(obj)
     st = _state(obj)
     assert st.model is model and _counts() == (built, reused + 1)
+    # the status says the surface was held, with its own build's time (a modelling
+    # session read build_seconds after a resolution change as the surface's)
+    held = api.status(obj)
+    assert held["surface_held"] and held["surface_seconds"] == first["surface_seconds"]
     assert st.n_points == len(P4) != len(P3)
     assert np.array_equal(st.points, _core_points(obj, X, 4))  # float64, bit for bit
     assert np.array_equal(P4, st.points.astype(np.float32))
