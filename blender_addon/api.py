@@ -203,7 +203,9 @@ def status(obj, mod=None) -> dict:
     ``render_error``: why the last final render's build failed ("" none; its renders show
     the input meanwhile); ``stale``: True while the viewport shows the base mesh without an
     error (the surface is out of date: Live Update off and the mesh or a setting edited;
-    Rebuild makes it); the other counts are then those of the last build.
+    Rebuild makes it); the other counts are then those of the last build. It reads the last
+    evaluation: after :func:`update`, which writes the surface without evaluating, it says
+    True until the next depsgraph update (``bpy.context.view_layer.update()``).
     ``build_seconds``: the last build of the result (the sync); ``surface_seconds``: what
     constructing its surface took, and ``surface_held``: True when that surface was held
     from an earlier build with the same arguments (a resolution change makes only the

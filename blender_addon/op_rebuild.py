@@ -27,7 +27,7 @@ class OBJECT_OT_gerbs_rebuild(bpy.types.Operator):
             return {"CANCELLED"}
         # a further GERBS modifier is ignored by the sync (its own error line says so)
         ignored = [r.message for r in results[1:] if r.status == "error"]
-        warning = "; ".join([api.status(obj)["warning"]] + ignored).strip("; ")
+        warning = "; ".join(w for w in [api.status(obj)["warning"]] + ignored if w)
         if warning:
             self.report({"WARNING"}, warning)
         return {"FINISHED"}

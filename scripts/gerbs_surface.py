@@ -245,6 +245,7 @@ def obj_references(path: Path) -> list[Path]:
     try:
         with open(path, "rb") as f:
             for line in f:
+                line = line.lstrip()
                 if line.startswith(b"mtllib"):
                     name = line[6:].strip().decode("utf-8", "replace")
                     if name:

@@ -251,6 +251,18 @@ def _open_seams(G, vertex_map, sizes, flat, partner):
     return np.unique(vertex_map[pairs]), edges
 
 
+def _area_scale(G, sizes, flat, rtol) -> float | None:
+    """The median edge length of the faces with an area (None where none has one, or all
+    do: the caller's own median then)."""
+    from .validation import flat_faces
+    bad = flat_faces(G, sizes, flat, rtol)
+    if not bad.any() or bad.all():
+        return None
+    keep = np.repeat(~bad, sizes)
+    e = rf.unique_edges(sizes[~bad], flat[keep], len(G))
+    return float(np.median(np.linalg.norm(G[e[:, 0]] - G[e[:, 1]], axis=1)))
+
+
 def _faces_without_merge(G, sizes0, flat0, rtol) -> bool:
     """Would faces with an area be left without welding? (Only to say why a mesh came out
     empty: the same stages as :func:`repair_mesh` with ``merge_distance=None``.)"""
@@ -289,8 +301,10 @@ def repair_mesh(vertices, faces, *, merge_distance=None, rest_positions=None,
     sizes, flat, origin = rf.clean_faces(sizes0, rep[flat0], np.arange(len(sizes0)), sizes0,
                                          rf.input_repeats(sizes0, flat0), notes)
     if len(sizes):
-        # a stray coordinate first: its faces would otherwise pass for zero-area ones below
-        check_outliers(G, rf.unique_edges(sizes, flat, V))
+        # a stray coordinate first: its faces would otherwise pass for zero-area ones below;
+        # measured against the edges of the faces with an area (a review: 60 collapsed
+        # slivers beside a grid made the median 2e-9 and every real vertex an outlier)
+        check_outliers(G, rf.unique_edges(sizes, flat, V), _area_scale(G, sizes, flat, rtol))
         sizes, flat, origin = rf.merge_zero_area(G, sizes, flat, origin, rtol, notes)
         sizes, flat, origin = rc.split_concave(G, sizes, flat, origin, notes)
     if not len(sizes):

@@ -71,15 +71,18 @@ def validate_geometry(vertices, topology: MeshTopology, rtol: float = 1e-12,
                                "corners) in faces", np.flatnonzero(flat), "face")
 
 
-def check_outliers(x, edges) -> tuple[np.ndarray, float]:
+def check_outliers(x, edges, scale=None) -> tuple[np.ndarray, float]:
     """Raise ``outlier_vertex`` for the vertices of x (V, 3) whose edges (``edges`` (E, 2),
     each once) are all longer than ``OUTLIER_FACTOR`` times the median edge length; else
     return (the edges' lengths (E,), that median). Checked before the repairs too
     (:func:`gerbs_core.mesh.repair.repair_mesh`): next to a vertex 1e14 away its faces'
     areas vanish to the rounding, and the zero-area repair dropped them silently (a
-    newcomer's walk: Blender stores ``co.x = inf`` as 3.4e38)."""
+    newcomer's walk: Blender stores ``co.x = inf`` as 3.4e38). ``scale``: the median edge
+    length to compare with, where the caller knows a better one (the repair: of the faces
+    with an area, not of slivers it will drop)."""
     length = np.linalg.norm(x[edges[:, 1]] - x[edges[:, 0]], axis=1)
-    scale = float(np.median(length)) if len(length) else 0.0
+    if scale is None:
+        scale = float(np.median(length)) if len(length) else 0.0
     shortest = np.full(len(x), np.inf)
     np.minimum.at(shortest, edges[:, 0], length)
     np.minimum.at(shortest, edges[:, 1], length)

@@ -95,6 +95,26 @@ def test_a_stray_coordinate_is_refused_before_its_faces_pass_for_zero_area(far):
     assert [w.tag for w in BlendingSurface(L, F).warnings] == ["unused_vertex"]
 
 
+def test_collapsed_slivers_do_not_make_the_real_vertices_outliers():
+    """A review (2026-12-07): 60 collapsed triangles (three vertices within 2e-9 of a point)
+    beside a 6 x 6 grid made the median edge 2e-9 once the outlier check ran before the
+    zero-area repair, and every real vertex an outlier; the median is now of the faces
+    with an area, and the mesh builds as before, its slivers dropped."""
+    from gerbs_core.mesh import BlendingSurface
+    V, F = P.grid(6)
+    F = [tuple(f) for f in np.asarray(F).tolist()]
+    rng = np.random.default_rng(0)
+    extra = []
+    for k in range(60):
+        c = V[rng.integers(len(V))]
+        d = rng.standard_normal(3)
+        d /= np.linalg.norm(d)
+        extra += [c, c + 1e-9 * d, c + 2e-9 * d]
+        F.append((len(V) + 3 * k, len(V) + 3 * k + 1, len(V) + 3 * k + 2))
+    s = BlendingSurface(np.concatenate([V, extra]), F)
+    assert {"degenerate_face", "unused_vertex"} <= {w.tag for w in s.warnings}
+
+
 def _moebius(n=12):
     """A Moebius strip of n quads (one-sided: no consistent orientation)."""
     t = 2 * np.pi * np.arange(n) / n

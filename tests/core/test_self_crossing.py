@@ -66,3 +66,22 @@ def test_a_cage_that_crosses_itself_is_not_blamed_on_the_surface():
     assert len(crossing_pairs(P, T)) > 100                    # the crossings are there
     lat = s.lattice(4)
     assert len(surface_crossings(s.topology, s.vertices, P, T, lat.triangle_face)) == 0
+
+
+def test_a_seam_whose_copies_differ_by_rounding_is_one_place():
+    """A review (2026-12-07): Suzanne's right half detached along x = 0 (an open seam, its
+    vertices duplicated) warned on 42 faces along the seam once the copies differed by
+    1e-9, where the repair itself calls them one seam (its tolerance, SEAM_RTOL)."""
+    X, F = primitives.suzanne()
+    V, dup, F2 = list(X), {}, []
+    for f in F:
+        if X[list(f)].mean(axis=0)[0] > 0:
+            F2.append(tuple(dup.setdefault(i, len(V) + len(dup)) for i in f))
+        else:
+            F2.append(tuple(f))
+    V = np.concatenate([X, X[sorted(dup, key=dup.get)]])
+    for offset in (0.0, 1e-9):
+        W = V.copy()
+        W[len(X):] += offset
+        tags = [w.tag for w in BlendingSurface(W, F2).warnings]
+        assert "open_seam" in tags and "self_crossing" not in tags, (offset, tags)
