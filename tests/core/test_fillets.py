@@ -182,3 +182,22 @@ def test_candidates_are_bounded_beside_many_tiny_faces():
     u = np.clip(((cent[:n] - p0) @ d) / (d @ d), 0.0, 1.0)
     dist = np.linalg.norm(cent[:n] - (p0 + u[:, None] * d), axis=1)
     assert (dist <= fillets.REACH * W[t]).sum() > 2 * fillets.NEAREST
+
+
+def test_a_symmetric_cup_is_the_same_surface_after_a_rounding_change():
+    """A review (2026-12-07): a cup (a 16-sided Cylinder, its top inset and extruded down)
+    moved by 0.56 of its height 2 when its positions were scaled by 1 + 1e-12: its inner
+    wall's quads are equally near two edges of a face, the last bits picked one, and with it
+    the count of covered edges and the fillet weight of three faces. Ties within 1e-9 now
+    keep the first edge; the surface scales with the input to rounding."""
+    from gerbs_core.mesh import BlendingSurface
+    from gerbs_core.mesh.fillets import fillet_sides
+    from gerbs_core.mesh.topology import MeshTopology
+    from tests.core.test_self_crossing import cup
+
+    V, F = cup()
+    topo = MeshTopology(F, len(V))
+    assert np.array_equal(fillet_sides(topo, V), fillet_sides(topo, V * (1 + 1e-12)))
+    a = BlendingSurface(V, F).tessellate(2)[0]
+    b = BlendingSurface(V * (1 + 1e-12), F).tessellate(2)[0] / (1 + 1e-12)
+    assert np.abs(a - b).max() <= 1e-8
