@@ -52,7 +52,7 @@ TURN_TO = 45.0      # degrees: full weight
 TOP = 100.0         # degrees: larger turns are not roundings and do not count
 COVER = 0.5         # the least share of f's edges that such turns lie near
 NEAREST = 32        # the candidate smaller faces per edge of f (the nearest to its midpoint)
-TIE = 1e-9          # relative: nearer edges within this count as equally near (the first wins)
+TIE = 1e-9          # relative: edges within this of the nearest count as equally near (all)
 
 
 def smoothstep(x, lo: float, hi: float) -> np.ndarray:
@@ -128,24 +128,25 @@ def _near_pairs(topo, X, cent, W, size, eligible):
     key = np.unique(f[keep] * topo.n_faces + g[keep])
     f, g = key // topo.n_faces, key % topo.n_faces
     sizes = np.asarray(topo.face_sizes)
-    best = np.full(len(f), np.inf)
-    kbest = np.zeros(len(f), np.int64)
-    for k in range(int(sizes[f].max()) if len(f) else 0):
+    # every edge of f's distance to g's centroid (the nearest point of the segment, its
+    # ends included), then every edge within TIE of the nearest: equally near edges (a
+    # centroid beyond a corner is as near to both edges there; a symmetric cup's wall)
+    # all count, so neither rounding nor where a face's corner list starts decides
+    # (reviews, 2026-12-07: a 1e-12 scaling, a rotated corner list or a mirrored copy
+    # moved a cup's surface by 0.26-0.56 of its height 2)
+    kmax = int(sizes[f].max()) if len(f) else 0
+    dist = np.full((len(f), kmax), np.inf)
+    for k in range(kmax):
         at = np.flatnonzero(k < sizes[f])
         ck = fo[f[at]] + k
         a, ab = X[fv[ck]], X[fv[nx[ck]]] - X[fv[ck]]
         p = cent[g[at]] - a
         t = np.clip((p * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
-        d = np.linalg.norm(p - t[:, None] * ab, axis=1)
-        # closer by more than rounding: a face equidistant from two edges (a symmetric
-        # cup's wall) keeps the first, whatever the last bits say (a review: a 1e-12
-        # scaling moved the nearest edge, the count of covered edges, and a cup's
-        # surface by 0.56 of its height 2)
-        closer = d < best[at] * (1.0 - TIE)
-        best[at[closer]] = d[closer]
-        kbest[at[closer]] = k
+        dist[at, k] = np.linalg.norm(p - t[:, None] * ab, axis=1)
+    best = dist.min(axis=1) if kmax else np.zeros(0)
     near = best <= REACH * W[f]
-    return f[near], g[near], kbest[near]
+    row, k = np.nonzero((dist <= best[:, None] * (1.0 + TIE)) & near[:, None])
+    return f[row], g[row], k
 
 
 def fillet_sides(topo, X) -> np.ndarray:
