@@ -135,18 +135,32 @@ def _near_pairs(topo, X, cent, W, size, eligible):
     # (reviews, 2026-12-07: a 1e-12 scaling, a rotated corner list or a mirrored copy
     # moved a cup's surface by 0.26-0.56 of its height 2)
     kmax = int(sizes[f].max()) if len(f) else 0
-    dist = np.full((len(f), kmax), np.inf)
-    for k in range(kmax):
+
+    def distance(k):
+        """(the pairs whose f has an edge k, their distances to it)"""
         at = np.flatnonzero(k < sizes[f])
         ck = fo[f[at]] + k
         a, ab = X[fv[ck]], X[fv[nx[ck]]] - X[fv[ck]]
         p = cent[g[at]] - a
         t = np.clip((p * ab).sum(1) / np.maximum((ab * ab).sum(1), 1e-300), 0.0, 1.0)
-        dist[at, k] = np.linalg.norm(p - t[:, None] * ab, axis=1)
-    best = dist.min(axis=1) if kmax else np.zeros(0)
+        return at, np.linalg.norm(p - t[:, None] * ab, axis=1)
+
+    # two passes, O(pairs) memory (an n-gon of thousands of corners has as many edges)
+    best = np.full(len(f), np.inf)
+    for k in range(kmax):
+        at, d = distance(k)
+        best[at] = np.minimum(best[at], d)
     near = best <= REACH * W[f]
-    row, k = np.nonzero((dist <= best[:, None] * (1.0 + TIE)) & near[:, None])
-    return f[row], g[row], k
+    rows, ks = [], []
+    for k in range(kmax):
+        at, d = distance(k)
+        tie = near[at] & (d <= best[at] * (1.0 + TIE))
+        rows.append(at[tie])
+        ks.append(np.full(int(tie.sum()), k, np.int64))
+    row = np.concatenate(rows) if rows else np.zeros(0, np.int64)
+    k = np.concatenate(ks) if ks else np.zeros(0, np.int64)
+    order = np.argsort(row, kind="stable")
+    return f[row[order]], g[row[order]], k[order]
 
 
 def fillet_sides(topo, X) -> np.ndarray:
