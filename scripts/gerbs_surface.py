@@ -123,8 +123,16 @@ def parse_args(argv):
                         "groups) or whose faces' normals differ at a shared corner (glTF "
                         "split normals; with --merge-distance, which welds the seams "
                         "first)")
+    p.add_argument("--up-axis", choices=("Y", "Z"), default=None,
+                   help="the up axis of an OBJ, PLY or STL input: Y (OBJ's usual) or Z (CAD, "
+                        "3D printing); an OBJ output is written the same way, a glTF one "
+                        "Y-up as its format says (default: each importer's own, Y for OBJ, "
+                        "Z for PLY and STL)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
+    if args.up_axis is not None and args.input.suffix.lower() in (".gltf", ".glb"):
+        raise UserError("--up-axis: a glTF input is Y-up by its format; the option is for "
+                        "OBJ, PLY and STL inputs")
     args.default_output = args.output is None  # only the default's folder is made
     if args.default_output:
         args.output = Path("out") / f"{args.input.stem}_gerbs.glb"
@@ -257,7 +265,7 @@ def obj_references(path: Path) -> list[Path]:
 
 # --- import ---------------------------------------------------------------------
 
-def import_mesh(bpy, path: Path):
+def import_mesh(bpy, path: Path, up=None):
     """Import with Blender's importer; return the new mesh objects.
 
     What reaches the surface: OBJ, PLY and glTF faces exactly as indexed in the
@@ -276,7 +284,7 @@ def import_mesh(bpy, path: Path):
     try:
         # the glTF importer logs its progress on standard output: not ours to show
         with _stdout_silenced():
-            _import(bpy, ext, path)
+            _import(bpy, ext, path, up)
     except RuntimeError as exc:
         from blender_addon.errors import operator_message
         raise UserError(f"cannot read {path.name}: {operator_message(exc)}") from None
@@ -341,15 +349,24 @@ def obj_rounding(bpy, objects) -> str:
     return ""
 
 
-def _import(bpy, ext: str, path: Path) -> None:
+def axes(up: str | None) -> dict:
+    """The importers' and the OBJ exporter's axis keywords for ``--up-axis`` (none: each
+    one's default)."""
+    if up is None:
+        return {}
+    return {"Y": {"forward_axis": "NEGATIVE_Z", "up_axis": "Y"},
+            "Z": {"forward_axis": "Y", "up_axis": "Z"}}[up]
+
+
+def _import(bpy, ext: str, path: Path, up=None) -> None:
     if ext == ".obj":
-        bpy.ops.wm.obj_import(filepath=str(path))
+        bpy.ops.wm.obj_import(filepath=str(path), **axes(up))
     elif ext in (".gltf", ".glb"):
         bpy.ops.import_scene.gltf(filepath=str(path), merge_vertices=False)
     elif ext == ".ply":
-        bpy.ops.wm.ply_import(filepath=str(path))
+        bpy.ops.wm.ply_import(filepath=str(path), **axes(up))
     else:
-        bpy.ops.wm.stl_import(filepath=str(path))
+        bpy.ops.wm.stl_import(filepath=str(path), **axes(up))
 
 
 # --- creases --------------------------------------------------------------------
@@ -542,7 +559,8 @@ def sidecars(out: Path) -> list[Path]:
     return [] if side is None else [out.with_suffix(side)]
 
 
-def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -> None:
+def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False,
+                up=None) -> None:
     """Export into a temporary folder beside `out`, then rename every file into
     place (sidecars first); refuse if one would replace a `protected` file. The folder
     of `out` must exist unless `make_folder` (the default output's ``out/``)."""
@@ -564,6 +582,7 @@ def export_mesh(bpy, objects, out: Path, protected, make_folder: bool = False) -
                 # materials in a .mtl beside it, where the input has any (as .glb keeps
                 # them; a newcomer's walk found them dropped)
                 bpy.ops.wm.obj_export(filepath=str(target), export_selected_objects=True,
+                                      **axes(up),
                                       apply_modifiers=True, export_materials=any(
                                           len(o.data.materials) for o in objects))
             else:
@@ -612,7 +631,7 @@ def run(args, src: Path, out: Path, protected) -> None:
     bpy.ops.wm.read_factory_settings(use_empty=True)
     blender_addon.register()
     try:
-        objects = import_mesh(bpy, src)
+        objects = import_mesh(bpy, src, args.up_axis)
         if not objects:
             raise UserError(f"{args.input} contains no mesh")
         for obj in objects:  # what a still surface leaves out: said, not dropped silently
@@ -657,7 +676,8 @@ def run(args, src: Path, out: Path, protected) -> None:
             print(f"warning: {rounding}", file=sys.stderr)
         if not args.quiet:
             print(f"writing {out} ...", file=sys.stderr)
-        export_mesh(bpy, objects, out, protected, make_folder=args.default_output)
+        export_mesh(bpy, objects, out, protected, make_folder=args.default_output,
+                    up=args.up_axis)
     finally:
         blender_addon.unregister()
 

@@ -162,6 +162,45 @@ def test_a_rigged_gltf_gives_a_valid_still_surface_and_says_what_it_leaves_out(b
     assert sorted(n.get("name") for n in doc["nodes"]) == ["Limb", "Morph"]
 
 
+def test_a_z_up_obj_stands_upright_in_gltf_with_up_axis_z(blender, tmp_path):
+    """An export test (2026-12-07): an OBJ written Z-up (CAD, 3D printing) came out of the
+    CLI on its side in glTF, with no option to say so. --up-axis Z reads it Z-up: the glTF,
+    read back into Blender, stands upright, and an OBJ output keeps z as its up axis."""
+    import bpy
+    import numpy as np
+
+    corners = [(x, y, z) for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (0.0, 4.0)]
+    faces = [(1, 3, 4, 2), (5, 6, 8, 7), (1, 2, 6, 5), (3, 7, 8, 4), (1, 5, 7, 3),
+             (2, 4, 8, 6)]                                   # a 1 x 1 x 4 tower, z up
+    src = tmp_path / "tower.obj"
+    src.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in corners)
+                   + "".join("f " + " ".join(map(str, f)) + "\n" for f in faces))
+
+    def tall_axis_in_blender(path):
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.import_scene.gltf(filepath=str(path))
+        (obj,) = [o for o in bpy.data.objects if o.type == "MESH"]
+        V = np.array([v.co[:] for v in obj.data.vertices])
+        W = V @ np.array(obj.matrix_world)[:3, :3].T
+        return int(np.argmax(np.ptp(W, axis=0)))
+
+    for up, tall in ((None, 1), ("Z", 2)):       # Blender's z is up; on its side: its y
+        args = ["--up-axis", up] if up else []
+        out = run(src, "-o", tmp_path / f"t{up}.glb", "--resolution", "2", "--quiet", *args,
+                  cwd=tmp_path)
+        assert out.returncode == 0, out.stderr
+        assert tall_axis_in_blender(tmp_path / f"t{up}.glb") == tall, up
+    out = run(src, "-o", tmp_path / "t.obj", "--resolution", "2", "--quiet", "--up-axis", "Z",
+              cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    V = np.array([[float(c) for c in line.split()[1:4]]
+                  for line in (tmp_path / "t.obj").read_text().splitlines()
+                  if line.startswith("v ")])
+    assert np.argmax(np.ptp(V, axis=0)) == 2                 # still z up
+    out = run(tmp_path / "tNone.glb", "-o", tmp_path / "x.glb", "--up-axis", "Z", cwd=tmp_path)
+    assert out.returncode == 2 and "--up-axis: a glTF input is Y-up" in out.stderr
+
+
 def test_the_wrong_python_gets_one_error_line_naming_the_environment(tmp_path):
     # -S: no site-packages, so no bpy (as a system Python without the project's environment)
     out = run(cwd=tmp_path, python=(sys.executable, "-S"))
