@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .arrays import ranges
 from .repair import MeshWarning
 
 __all__ = ["crossing_pairs", "surface_crossings", "self_crossing_warning", "MIN_OVERLAP",
@@ -180,13 +181,12 @@ def _position_ids(topology, cage) -> np.ndarray:
     return connected_components(graph, directed=False)[1]
 
 
-def _incidence(topology, cage):
-    """Sparse (P, F) incidence of the cage's distinct positions and the faces: faces that
-    share a position are neighbours, also where the repair split a vertex into one per fan
-    (a bow-tie) or an export left a seam open (coincident vertices): their surfaces meet
-    there as drawn."""
+def _incidence(topology, pid):
+    """Sparse (P, F) incidence of the cage's distinct positions (``pid`` (V,):
+    :func:`_position_ids`) and the faces: faces that share a position are neighbours, also
+    where the repair split a vertex into one per fan (a bow-tie) or an export left a seam
+    open (coincident vertices): their surfaces meet there as drawn."""
     from scipy.sparse import csr_matrix
-    pid = _position_ids(topology, cage)
     fv = np.asarray(topology.face_vertices)
     return csr_matrix((np.ones(len(fv), np.int32), (pid[fv], np.asarray(topology.corner_face))),
                       shape=(int(pid.max()) + 1, topology.n_faces))
@@ -204,12 +204,10 @@ def _fan(topology, faces):
     """(triangles (t, 3) of the cage's faces ``faces``, fanned from their first corner;
     (t,) their face)."""
     fo, fv = np.asarray(topology.face_offsets), np.asarray(topology.face_vertices)
-    tri, owner = [], []
-    for f in faces.tolist():
-        c = fv[fo[f]:fo[f + 1]]
-        tri += [(c[0], c[k], c[k + 1]) for k in range(1, len(c) - 1)]
-        owner += [f] * (len(c) - 2)
-    return np.asarray(tri, np.int64).reshape(-1, 3), np.asarray(owner, np.int64)
+    n = np.asarray(topology.face_sizes)[faces] - 2          # triangles per face
+    owner = np.repeat(faces, n)
+    second = ranges(fo[faces] + 1, n)                        # corners 1 .. size - 2
+    return np.stack([fv[fo[owner]], fv[second], fv[second + 1]], axis=1), owner
 
 
 def surface_crossings(topology, cage, points, triangles, triangle_face):
@@ -229,7 +227,8 @@ def surface_crossings(topology, cage, points, triangles, triangle_face):
     fa, fb = fpairs[:, 0], fpairs[:, 1]
     near = np.linalg.norm(centre[fa] - centre[fb], axis=1) <= radius[fa] + radius[fb]
     fa, fb = fa[near], fb[near]
-    inc = _incidence(topology, cage)
+    pid = _position_ids(topology, cage)
+    inc = _incidence(topology, pid)
     keep = _apart(inc, fa, fb)
     fa, fb = fa[keep], fb[keep]
     if not len(fa):
@@ -252,9 +251,8 @@ def surface_crossings(topology, cage, points, triangles, triangle_face):
 
     def reach(f, g):
         """(pair index, triangle) of the triangles of faces f (K,) meeting g's box."""
-        n = size[f]
-        k = np.repeat(np.arange(len(f)), n)
-        t = order[start[f][k] + np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n)]
+        k = np.repeat(np.arange(len(f)), size[f])
+        t = order[ranges(start[f], size[f])]
         ok = (tlo[t] <= fhi[g[k]]).all(axis=1) & (flo[g[k]] <= thi[t]).all(axis=1)
         return k[ok], t[ok]
 
@@ -268,7 +266,7 @@ def surface_crossings(topology, cage, points, triangles, triangle_face):
     sa = np.cumsum(na) - na
     sb = np.cumsum(nb) - nb
     k = np.repeat(np.arange(len(fa)), na * nb)
-    r = np.arange(total) - np.repeat(np.cumsum(na * nb) - na * nb, na * nb)
+    r = ranges(np.zeros(len(fa), np.int64), na * nb)      # the pair's own 0 .. na nb - 1
     A = ta[sa[k] + r // np.maximum(nb[k], 1)]
     B = tb[sb[k] + r % np.maximum(nb[k], 1)]
     pairs = crossing_pairs(X, T, np.stack([A, B], axis=1))
@@ -292,7 +290,7 @@ def surface_crossings(topology, cage, points, triangles, triangle_face):
     # and where the cage's fans touch at a point (a bow-tie the repair split, an open seam:
     # positions of several vertices), their surfaces meet near it as drawn (a Suzanne
     # exported as STL and joined by position crossed at her two bow-ties)
-    copies = np.bincount(_position_ids(topology, cage)[np.unique(np.asarray(topology.face_vertices))],
+    copies = np.bincount(pid[np.unique(np.asarray(topology.face_vertices))],
                          minlength=inc.shape[0])
     touch = np.asarray(inc.T @ (copies > 1).astype(np.int32) > 0).ravel()
     hit = near(hit | touch)
