@@ -66,7 +66,8 @@ from . import repair_faces as rf
 from . import repair_sheets as rs
 from .selection import selection_matrix
 from .topology import MeshTopology, _parse_faces
-from .validation import check_finite, check_outliers, corner_successors, validate_geometry
+from .validation import (check_finite, check_outliers, corner_successors, flat_faces,
+                         validate_geometry)
 
 __all__ = ["MeshWarning", "RepairedMesh", "repair_mesh"]
 
@@ -251,11 +252,9 @@ def _open_seams(G, vertex_map, sizes, flat, partner):
     return np.unique(vertex_map[pairs]), edges
 
 
-def _area_scale(G, sizes, flat, rtol) -> float | None:
-    """The median edge length of the faces with an area (None where none has one, or all
-    do: the caller's own median then)."""
-    from .validation import flat_faces
-    bad = flat_faces(G, sizes, flat, rtol)
+def _area_scale(G, sizes, flat, bad) -> float | None:
+    """The median edge length of the faces with an area (``bad`` (F,): those without one;
+    None where none has one, or all do: the caller's own median then)."""
     if not bad.any() or bad.all():
         return None
     keep = np.repeat(~bad, sizes)
@@ -270,7 +269,8 @@ def _faces_without_merge(G, sizes0, flat0, rtol) -> bool:
     sizes, flat, origin = rf.clean_faces(sizes0, rep[flat0], np.arange(len(sizes0)), sizes0,
                                          rf.input_repeats(sizes0, flat0), [])
     if len(sizes):
-        sizes, flat, origin = rf.merge_zero_area(G, sizes, flat, origin, rtol, [])
+        sizes, flat, origin = rf.merge_zero_area(G, sizes, flat, origin,
+                                                 flat_faces(G, sizes, flat, rtol), [])
     return bool(len(sizes))
 
 
@@ -304,8 +304,9 @@ def repair_mesh(vertices, faces, *, merge_distance=None, rest_positions=None,
         # a stray coordinate first: its faces would otherwise pass for zero-area ones below;
         # measured against the edges of the faces with an area (a review: 60 collapsed
         # slivers beside a grid made the median 2e-9 and every real vertex an outlier)
-        check_outliers(G, rf.unique_edges(sizes, flat, V), _area_scale(G, sizes, flat, rtol))
-        sizes, flat, origin = rf.merge_zero_area(G, sizes, flat, origin, rtol, notes)
+        bad = flat_faces(G, sizes, flat, rtol)
+        check_outliers(G, rf.unique_edges(sizes, flat, V), _area_scale(G, sizes, flat, bad))
+        sizes, flat, origin = rf.merge_zero_area(G, sizes, flat, origin, bad, notes)
         sizes, flat, origin = rc.split_concave(G, sizes, flat, origin, notes)
     if not len(sizes):
         if merge_distance is not None and _faces_without_merge(G, sizes0, flat0, rtol):

@@ -13,7 +13,7 @@ from collections import defaultdict
 
 import numpy as np
 
-from .validation import chain_faces, corner_successors, flat_faces
+from .validation import chain_faces, corner_successors
 
 __all__ = ["weld_map", "clean_faces", "merge_zero_area"]
 
@@ -181,13 +181,13 @@ def _absorb(host, face, k):
     return None
 
 
-def merge_zero_area(x, sizes, flat, origin, rtol, notes):
-    """Zero-area faces (:func:`gerbs_core.mesh.validation.flat_faces`): collinear ones are
+def merge_zero_area(x, sizes, flat, origin, flat_mask, notes):
+    """Zero-area faces (``flat_mask`` (F,): :func:`gerbs_core.mesh.validation.flat_faces`,
+    which the caller needs too): collinear ones are
     merged into the face across their longest edge (the neighbour's boundary then runs
     along their other edges, so the surface closes over them); those with no single
     neighbour there, or self-cancelling ones (zero vector area, corners not on a line),
     are dropped, and the surface is bounded by their neighbours."""
-    flat_mask = flat_faces(x, sizes, flat, rtol)
     if not flat_mask.any():
         return sizes, flat, origin
     chain = chain_faces(x, sizes, flat)  # collinear to the positions' rounding
