@@ -323,8 +323,10 @@ def _update(obj, mod, res, key, st, settings, skey, inp, resolution, force, t0, 
         return None
     carried_same = (np.array_equal(st.input.materials, inp.materials)
                     and inp.carried.same(st.input.carried))
-    if snapshot.misfit(res.data, inp):
-        return None  # the record no longer fits (a layer added at resolution 1): the rebuild says so
+    # a record that changes may no longer fit (a layer added at resolution 1): the rebuild
+    # says so; an unchanged one fits (a drag's positions: nothing to check on its path)
+    if not carried_same and snapshot.misfit(res.data, inp):
+        return None
     if st.input.same_geometry(inp) and settled:  # only what it carries changed
         st.stamp = write_carried(res, mod, st.transfer, inp, st.record)
         st.input = inp
