@@ -280,10 +280,10 @@ class BlendingSurface(Immutable):
         itself where the cage does not (``self_crossing``, naming the input faces:
         :mod:`gerbs_core.mesh.self_crossing`); the last two read on first access from the
         surface at resolution 4, or 2 on a large mesh."""
-        return self._warnings + self._thin_part
+        return self._warnings + self._surface_warnings
 
     @cached_property
-    def _thin_part(self) -> tuple:
+    def _surface_warnings(self) -> tuple:
         """The warnings about the surface itself, read on one lattice: ``thin_part`` and
         ``self_crossing`` (:mod:`gerbs_core.mesh.self_crossing`, naming input faces)."""
         lat, S = thin_part_samples(self)
@@ -306,7 +306,7 @@ class BlendingSurface(Immutable):
         InvalidMeshError ``non_finite`` naming the rows with NaN or infinite coordinates."""
         new = object.__new__(BlendingSurface)
         new.__dict__.update({k: v for k, v in self.__dict__.items()
-                             if k not in ("eps0", "_thin_part")})
+                             if k not in ("eps0", "_surface_warnings")})
         X = points("vertices", vertices, len(self.repair.representative))
         check_finite(X, "vertices")
         new._cache("_X", self.repair.positions(X))
