@@ -1,12 +1,12 @@
-"""A warning where the surface passes through itself (a mug's wall, a table's top).
+"""A warning where the surface passes through itself (a cup's wall or floor).
 
 Where a part of the cage is thin against its faces, the local functions of its two sides
-bulge into each other: a modeller's mug (a Cylinder, its top inset by 0.12 and extruded
-down: the inner wall one row of tall quads) comes out with the inner wall through the
-outer one, a table top with legs extruded from its corners with its top and underside
-crossing (a modelling session, 2026-12-07: 533 and 34 crossing pairs of output triangles at
-r = 4, none with Subdivision Surface). The box of such a surface stays near the cage's, so
-the thin-part warning (:mod:`gerbs_core.mesh.thin_parts`) does not see it; this check does.
+bulge into each other: a cup (a Cylinder of 16 sides, its top inset by 0.12 and extruded
+down 1.75, no loop cuts) comes out with its walls, floor and bottom crossing (425 pairs of
+output triangles at r = 4, none with Subdivision Surface; a modelling session, 2026-12-07,
+found a mug and a table crossing too, 533 and 34 pairs, until the fillet rule's ties
+counted every equally near edge). The box of such a surface stays near the cage's, so the
+thin-part warning (:mod:`gerbs_core.mesh.thin_parts`) does not see it; this check does.
 
 It reads the surface on the same lattice as the thin-part check (resolution 4, 2 on large
 meshes): triangles of that lattice that cross, sharing no point, by a segment longer than
